@@ -1,0 +1,3 @@
+from jaxrender.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,12 @@
+"""Shading pipelines. Each module registers one ``render(scene, camera, cfg) -> Frame``."""
+
+from jaxrender.pipelines.registry import (  # noqa: F401
+    REGISTRY,
+    RenderConfig,
+    get_pipeline,
+    list_pipelines,
+    make_config,
+    register,
+)
+
+# Pipeline modules are imported here as they land, so that registration happens on import.
