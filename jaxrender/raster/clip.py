@@ -1,0 +1,98 @@
+"""Clipping in homogeneous clip space, before the perspective divide.
+
+Triangles are clipped against the near and far planes (so nothing behind the eye produces a
+fragment, and a triangle crossing the near plane is clipped rather than dropped or exploded)
+and against a guard band |x|, |y| <= G w that keeps snapped window coordinates inside the range
+where integer edge functions are exact (see ``setup.py``). Sutherland-Hodgman on a fixed-size
+polygon: a triangle clipped by 6 planes has at most 9 vertices, fanned into at most 7 triangles.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.types import Array
+
+MAX_POLY = 9  # 3 vertices + at most one more per plane
+MAX_FAN = MAX_POLY - 2
+
+
+def planes(guard: float) -> np.ndarray:
+    """The six clip planes as rows (a, b, c, d): a point is inside when a x + b y + c z + d w >= 0."""
+    return np.array(
+        [
+            [0, 0, 1, 1],  # near:  z >= -w
+            [0, 0, -1, 1],  # far:   z <=  w
+            [-1, 0, 0, guard],  # x <= G w
+            [1, 0, 0, guard],  # x >= -G w
+            [0, -1, 0, guard],  # y <= G w
+            [0, 1, 0, guard],  # y >= -G w
+        ],
+        np.float32,
+    )
+
+
+def plane_distances(points: Array, guard: float) -> Array:
+    """float32[..., 4] -> float32[..., 6], elementwise (no matrix unit touches geometry)."""
+    p = jnp.asarray(planes(guard))
+    return jnp.sum(points[..., None, :] * p, axis=-1)
+
+
+def classify(tri_clip: Array, guard: float) -> tuple[Array, Array]:
+    """For float32[T, 3, 4]: (inside: all vertices inside every plane, crossing: needs clipping).
+
+    A triangle with all three vertices outside one plane is rejected (neither flag set).
+    """
+    d = plane_distances(tri_clip, guard)  # [T, 3, 6]
+    inside_v = d >= 0.0
+    inside = jnp.all(inside_v, axis=(1, 2))
+    rejected = jnp.any(jnp.all(~inside_v, axis=1), axis=1)
+    return inside, ~inside & ~rejected
+
+
+def _clip_against(poly: Array, n: Array, plane: Array) -> tuple[Array, Array]:
+    """Clip a batch of convex polygons [B, MAX_POLY, 4] with n vertices against one plane."""
+    idx = jnp.arange(MAX_POLY)
+    nxt = jnp.where(idx[None, :] + 1 < n[:, None], idx[None, :] + 1, 0)  # [B, MAX_POLY]
+    a = poly
+    b = jnp.take_along_axis(poly, nxt[..., None], axis=1)
+    da = jnp.sum(a * plane, axis=-1)
+    db = jnp.sum(b * plane, axis=-1)
+    live = idx[None, :] < n[:, None]
+    a_in, b_in = da >= 0.0, db >= 0.0
+    # The intersection is computed from the inside end towards the outside end, so that two
+    # triangles sharing this edge (in either direction) compute bit-identical vertices.
+    p_in = jnp.where(a_in[..., None], a, b)
+    p_out = jnp.where(a_in[..., None], b, a)
+    d_in = jnp.where(a_in, da, db)
+    d_out = jnp.where(a_in, db, da)
+    t = d_in / (d_in - d_out)
+    hit = p_in + t[..., None] * (p_out - p_in)
+    emit_a = live & a_in
+    emit_hit = live & (a_in != b_in)
+    cand = jnp.stack([a, hit], axis=2).reshape(poly.shape[0], 2 * MAX_POLY, 4)
+    mask = jnp.stack([emit_a, emit_hit], axis=2).reshape(poly.shape[0], 2 * MAX_POLY)
+    order = jnp.argsort(~mask, axis=1, stable=True)[:, :MAX_POLY]
+    out = jnp.take_along_axis(cand, order[..., None], axis=1)
+    return out, jnp.minimum(jnp.sum(mask, axis=1), MAX_POLY).astype(jnp.int32)
+
+
+def clip_triangles(tri_clip: Array, guard: float) -> tuple[Array, Array]:
+    """float32[B, 3, 4] -> fan triangles float32[B, MAX_FAN, 3, 4] and their validity [B, MAX_FAN]."""
+    bsz = tri_clip.shape[0]
+    poly = jnp.zeros((bsz, MAX_POLY, 4), tri_clip.dtype).at[:, :3].set(tri_clip)
+    n = jnp.full((bsz,), 3, jnp.int32)
+    for plane in planes(guard):
+        poly, n = _clip_against(poly, n, jnp.asarray(plane))
+    k = jnp.arange(1, MAX_FAN + 1)
+    fan = jnp.stack(
+        [
+            jnp.broadcast_to(poly[:, :1], (bsz, MAX_FAN, 4)),
+            poly[:, k],
+            poly[:, jnp.minimum(k + 1, MAX_POLY - 1)],
+        ],
+        axis=2,
+    )
+    valid = k[None, :] + 1 < n[:, None]
+    return fan, valid

@@ -1,0 +1,98 @@
+"""Coverage by fixed-capacity work lists: every triangle's pixel bounding box is expanded into
+(pixel, triangle) work items by a prefix sum, and the items are tested in chunks of a static
+capacity inside a ``lax.while_loop``. However many items a frame needs, all are processed: the
+capacity sets the chunk size (memory and compile shape), never what is kept.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import jax
+import jax.numpy as jnp
+
+from jaxrender.raster.setup import SUBPIXEL, TriSetup
+from jaxrender.types import Array, pytree_dataclass
+
+EMPTY_KEY = (1 << 63) - 1  # no fragment: larger than every packed key
+
+
+@pytree_dataclass
+class WorkChunk:
+    """One chunk of work items; arrays of shape [capacity]."""
+
+    slot: Array  # int64 triangle slot in the setup arrays
+    tri: Array  # int32 original triangle id
+    px: Array  # int64 pixel column
+    py: Array  # int64 pixel row
+    covered: Array  # bool: live item whose sample point is inside the triangle
+    depth: Array  # float32 window depth at the sample point (clamped to [0, 1])
+
+
+def total_items(setup: TriSetup) -> Array:
+    return jnp.sum(setup.count)
+
+
+def _chunk(setup: TriSetup, incl: Array, base: Array, capacity: int, offset: Array) -> WorkChunk:
+    n_slots = setup.count.shape[0]
+    starts = incl - setup.count
+    # Which triangle owns each item: mark each triangle's first item, then a running maximum.
+    local = starts - base
+    in_chunk = (setup.count > 0) & (local >= 0) & (local < capacity)
+    mark = jnp.full((capacity,), -1, jnp.int64)
+    mark = mark.at[jnp.where(in_chunk, local, capacity)].max(
+        jnp.arange(n_slots, dtype=jnp.int64), mode="drop"
+    )
+    first = jnp.searchsorted(incl, base, side="right").astype(jnp.int64)
+    mark = mark.at[0].max(first)
+    slot = jnp.minimum(jax.lax.cummax(mark), n_slots - 1)
+
+    item = base + jnp.arange(capacity, dtype=jnp.int64)
+    live = item < incl[-1]
+    j = item - starts[slot]
+    bw = setup.bw[slot]
+    px = setup.x0[slot] + j % bw
+    py = setup.y0[slot] + j // bw
+    sx = px * SUBPIXEL + offset[0]
+    sy = py * SUBPIXEL + offset[1]
+    e = setup.edge_a[slot] * sx[:, None] + setup.edge_b[slot] * sy[:, None] + setup.edge_c[slot]
+    covered = live & jnp.all(e + setup.top_left[slot] > 0, axis=1)
+    lam = e.astype(jnp.float32) * setup.inv_area[slot][:, None]
+    depth = jnp.clip(jnp.sum(lam * setup.z[slot], axis=1), 0.0, 1.0)
+    return WorkChunk(slot, setup.tri[slot], px, py, covered, depth)
+
+
+def for_each_chunk(
+    setup: TriSetup, capacity: int, offset: Array, state, fn: Callable[[object, WorkChunk], object]
+):
+    """Run ``state = fn(state, chunk)`` over all chunks of the work list (dynamic trip count)."""
+    incl = jnp.cumsum(setup.count)
+    total = incl[-1]
+    n_chunks = (total + capacity - 1) // capacity
+
+    def body(i, st):
+        return fn(st, _chunk(setup, incl, i * capacity, capacity, offset))
+
+    return jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state)
+
+
+def depth_key(depth: Array, tri: Array) -> Array:
+    """Pack (depth, id) into one int64 whose minimum is the nearest, lowest-id fragment.
+
+    Non-negative float32 bit patterns order like the floats, so depth sorts first and ties go
+    to the lower triangle index."""
+    bits = jax.lax.bitcast_convert_type(depth, jnp.int32).astype(jnp.int64)
+    return (bits << 32) | tri.astype(jnp.int64)
+
+
+def accumulate(zbuf: Array, setup: TriSetup, width: int, capacity: int, offset: Array):
+    """Scatter-min every covered item's key into zbuf (int64[H*W]); returns (zbuf, fragments)."""
+    n_pix = zbuf.shape[0]
+
+    def fn(state, c: WorkChunk):
+        zb, frags = state
+        pix = jnp.where(c.covered, c.py * width + c.px, n_pix)
+        zb = zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop")
+        return zb, frags + jnp.sum(c.covered, dtype=jnp.int64)
+
+    return for_each_chunk(setup, capacity, offset, (zbuf, jnp.int64(0)), fn)

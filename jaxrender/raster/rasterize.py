@@ -1,0 +1,195 @@
+"""The rasterizer's entry points: clip-space or world-space triangles -> VisBuffer.
+
+Stages (each named for profiles): classify against the clip planes; set up and cover the
+triangles that need no clipping; clip the crossing ones in chunks of ``clip_capacity`` and
+cover their fans; resolve each pixel's winner to barycentrics. Every capacity here is a chunk
+size, not a limit: work beyond it runs in further iterations of a loop inside the program.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.raster import samples as sample_patterns
+from jaxrender.raster.clip import MAX_FAN, classify, clip_triangles
+from jaxrender.raster.coverage import EMPTY_KEY, accumulate
+from jaxrender.raster.resolve import resolve
+from jaxrender.raster.setup import SUBPIXEL_BITS, guard_band, setup_triangles
+from jaxrender.scene.camera import Camera, world_to_clip
+from jaxrender.types import Array, VisBuffer
+
+_SAFE_VERTEX = (0.0, 0.0, 0.0, 1.0)  # stands in for a dropped slot; never produces coverage
+
+
+def default_work_capacity(n_tris: int, width: int, height: int) -> int:
+    """Chunk size of the pixel work list: about two bounding-box pixels per screen pixel plus
+    one per triangle, rounded up to 2^16. A frame needing more runs more chunks."""
+    want = 2 * width * height + 2 * n_tris
+    return int(min(max(1 << 16, -(-want // (1 << 16)) * (1 << 16)), 1 << 25))
+
+
+def default_clip_capacity(n_tris: int) -> int:
+    return int(min(n_tris, 4096))
+
+
+def rasterize_clip(
+    clip: Array,
+    faces: Array,
+    width: int,
+    height: int,
+    *,
+    cull_backfaces: bool = False,
+    sample_offsets=None,
+    work_capacity: int | None = None,
+    clip_capacity: int | None = None,
+) -> VisBuffer:
+    """Rasterize triangles given by clip-space vertices float32[V, 4] and faces int32[T, 3].
+
+    Returns a VisBuffer of shape (H, W) for one sample per pixel (the centre unless
+    ``sample_offsets`` says otherwise), or (S, H, W) when ``sample_offsets`` holds S > 1 offsets
+    in [0, 1)^2 (see ``jaxrender.raster.samples``). Triangles with a NaN or infinite vertex are
+    dropped and counted in ``counts['dropped_nonfinite']``; other bad input raises ValueError.
+    """
+    width, height = _check_size(width, height)
+    offsets = sample_patterns.validate(sample_offsets or sample_patterns.CENTER)
+    _check_mesh(clip, faces, "clip", 4)
+    n_tris = faces.shape[0]
+    return _rasterize(
+        jnp.asarray(clip, jnp.float32),
+        jnp.asarray(faces, jnp.int32),
+        width=width,
+        height=height,
+        cull_backfaces=bool(cull_backfaces),
+        offsets=sample_patterns.to_fixed(offsets, SUBPIXEL_BITS),
+        work_capacity=int(work_capacity or default_work_capacity(n_tris, width, height)),
+        clip_capacity=int(clip_capacity or default_clip_capacity(n_tris)),
+    )
+
+
+def rasterize(
+    positions: Array, faces: Array, camera: Camera, width: int, height: int, **kwargs
+) -> VisBuffer:
+    """Rasterize world-space positions float32[V, 3] seen through ``camera`` (see rasterize_clip)."""
+    width, height = _check_size(width, height)
+    _check_mesh(positions, faces, "positions", 3)
+    clip = world_to_clip(jnp.asarray(positions, jnp.float32), camera, width / height)
+    return rasterize_clip(clip, faces, width, height, **kwargs)
+
+
+@partial(
+    jax.jit,
+    static_argnames=(
+        "width",
+        "height",
+        "cull_backfaces",
+        "offsets",
+        "work_capacity",
+        "clip_capacity",
+    ),
+)
+def _rasterize(clip, faces, *, width, height, cull_backfaces, offsets, work_capacity, clip_capacity):
+    with jax.enable_x64(True):
+        return _rasterize_x64(
+            clip, faces, width, height, cull_backfaces, offsets, work_capacity, clip_capacity
+        )
+
+
+def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap) -> VisBuffer:
+    n_tris = faces.shape[0]
+    guard = guard_band(width, height)
+    safe = jnp.asarray(_SAFE_VERTEX, jnp.float32)
+    with jax.named_scope("classify"):
+        tri_clip = clip[faces]  # [T, 3, 4]
+        finite = jnp.all(jnp.isfinite(tri_clip), axis=(1, 2))
+        tri_clip = jnp.where(finite[:, None, None], tri_clip, safe)
+        inside, crossing = classify(tri_clip, guard)
+        inside, crossing = inside & finite, crossing & finite
+        n_cross = jnp.sum(crossing, dtype=jnp.int64)
+        rank = jnp.cumsum(crossing, dtype=jnp.int64) - 1
+    ids = jnp.arange(n_tris, dtype=jnp.int32)
+    main_clip = jnp.where(inside[:, None, None], tri_clip, safe)
+
+    def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
+        with jax.named_scope("setup"):
+            main = setup_triangles(main_clip, inside, ids, width, height, offset, cull)
+        with jax.named_scope("coverage"):
+            zbuf = jnp.full((width * height,), EMPTY_KEY, jnp.int64)
+            zbuf, frags = accumulate(zbuf, main, width, capacity, offset)
+            items = jnp.sum(main.count)
+
+        def clip_chunk(k, state):
+            zb, fr, it = state
+            with jax.named_scope("clip"):
+                sel = crossing & (rank // clip_cap == k)
+                idx = jnp.nonzero(sel, size=clip_cap, fill_value=0)[0]
+                live = jnp.arange(clip_cap) < n_cross - k * clip_cap
+                fan, fan_ok = clip_triangles(tri_clip[idx], guard)
+                fan_ok = (fan_ok & live[:, None]).reshape(-1)
+                fan = jnp.where(fan_ok[:, None, None], fan.reshape(-1, 3, 4), safe)
+                fan_ids = jnp.repeat(idx.astype(jnp.int32), MAX_FAN)
+                s = setup_triangles(fan, fan_ok, fan_ids, width, height, offset, cull)
+            with jax.named_scope("coverage"):
+                zb, fr = accumulate(zb, s, width, capacity, offset)
+            return zb, fr, it + jnp.sum(s.count)
+
+        n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
+        zbuf, frags, items = jax.lax.fori_loop(
+            jnp.int64(0), n_clip_chunks, clip_chunk, (zbuf, frags, items)
+        )
+        with jax.named_scope("resolve"):
+            off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
+            vis = resolve(zbuf, clip, faces, width, height, off_px)
+        return vis, frags, items
+
+    offs = jnp.asarray(offsets, jnp.int64)
+    if len(offsets) == 1:
+        vis, frags, items = one_sample(offs[0])
+    else:
+        vis, frags, items = jax.lax.map(one_sample, offs)
+        frags, items = jnp.sum(frags), jnp.sum(items)
+    counts = {
+        "fragments": frags.astype(jnp.int32),
+        "work_items": items.astype(jnp.int32),
+        "clipped": n_cross.astype(jnp.int32),
+        "dropped_nonfinite": jnp.sum(~finite, dtype=jnp.int32),
+    }
+    return VisBuffer(vis.tri_id, vis.depth, vis.bary, vis.dbary_dx, vis.dbary_dy, counts)
+
+
+def _check_size(width, height) -> tuple[int, int]:
+    for name, v in (("width", width), ("height", height)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v <= 0:
+            raise ValueError(f"rasterize: {name} must be a positive integer, got {v!r}")
+    if width * height >= 2**31:
+        raise ValueError(f"rasterize: {width}x{height} has too many pixels (limit 2^31)")
+    return int(width), int(height)
+
+
+def _check_mesh(verts, faces, what: str, dim: int) -> None:
+    """Checks that need only shapes and dtypes; values are checked when they are concrete."""
+    vshape, fshape = np.shape(verts), np.shape(faces)
+    if len(vshape) != 2 or vshape[1] != dim:
+        raise ValueError(f"rasterize: {what} must have shape (V, {dim}), got {vshape}")
+    if len(fshape) != 2 or fshape[1] != 3:
+        raise ValueError(f"rasterize: faces must have shape (T, 3), got {fshape}")
+    if vshape[0] == 0 or fshape[0] == 0:
+        raise ValueError(f"rasterize: empty mesh ({vshape[0]} vertices, {fshape[0]} faces)")
+    fdtype = np.dtype(getattr(faces, "dtype", np.asarray(faces).dtype))
+    if not np.issubdtype(fdtype, np.integer):
+        raise TypeError(f"rasterize: faces must be integers, got dtype {fdtype}")
+    if not np.issubdtype(np.dtype(getattr(verts, "dtype", np.float32)), np.floating):
+        raise TypeError(f"rasterize: {what} must be floating point")
+    if fshape[0] >= 2**31 - 1:
+        raise ValueError("rasterize: too many triangles for 32-bit ids")
+    if not isinstance(faces, jax.core.Tracer):
+        f = np.asarray(faces)
+        lo, hi = int(f.min()), int(f.max())
+        if lo < 0 or hi >= vshape[0]:
+            bad = lo if lo < 0 else hi
+            raise ValueError(
+                f"rasterize: face index {bad} out of range for {vshape[0]} vertices"
+            )
