@@ -1,0 +1,298 @@
+"""Scene TOML files (configs/scenes/*.toml), validated once; every error names file and key.
+
+```toml
+name = "demo"                      # optional, defaults to the file stem
+description = "one line"
+texture_resolution = 256           # optional power of two
+shadows = true                     # optional: shadow map of the first directional light
+
+[camera]                           # required
+eye = [0, 1.6, 4]
+target = [0, 1, 0]
+up = [0, 1, 0]                     # optional
+fov_y_deg = 60                     # optional; near, far optional
+
+[[materials]]                      # any number; meshes refer to them by name
+name = "floor"
+albedo = [0.8, 0.8, 0.8]           # also: specular, shininess, roughness, brdf, texture (image
+texture = "floor.png"              # file), normal_map (image file), alpha, alpha_tested,
+                                   # alpha_cutoff, emissive, procedural, stripe_resolution
+[[meshes]]                         # file = "x.obj|.ply|.glb|.gltf" or primitive = "plane|box|sphere"
+primitive = "plane"
+size = [10, 10]                    # plane [w, d], box [w, h, d], sphere radius
+subdivisions = 4                   # plane grid / sphere latitude bands
+uv_scale = [4, 4]                  # plane only
+material = "floor"                 # optional override (a file's own materials otherwise)
+translate = [0, 0, 0]              # also rotate_deg = [x, y, z], scale = s or [sx, sy, sz],
+                                   # velocity = [vx, vy, vz] (world units per frame)
+[[lights]]
+type = "directional"               # direction (towards the light), irradiance
+direction = [0.3, 1, 0.2]
+irradiance = 2.0                   # scalar or RGB
+# type = "point": position, intensity;  type = "ambient": radiance
+
+[effects]                          # optional overrides of the derived Effects flags
+shader_cost = 4
+```
+Relative paths are relative to the TOML file.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from jaxrender.scene.camera import look_at
+from jaxrender.scene.effects import BRDF_NAMES, EFFECT_FIELDS, PROCEDURAL_NAMES
+from jaxrender.scene.lights import make_lights
+from jaxrender.scene.materials import Material
+from jaxrender.scene.mesh import box, grid_plane, trs_matrix, uv_sphere
+from jaxrender.scene.mesh_io import load_mesh_file
+from jaxrender.scene.scene import Scene, build_scene
+from jaxrender.scene.textures import as_rgba
+
+
+class SceneConfigError(ValueError):
+    """A malformed scene file; the message names the file and the key."""
+
+    def __init__(self, path, key, problem):
+        self.path, self.key = str(path), key
+        super().__init__(f"{path}: key {key!r}: {problem}")
+
+
+# ---------------------------------------------------------------- value checkers
+
+def _num(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _vec(n):
+    def check(v):
+        return isinstance(v, list) and len(v) == n and all(_num(x) for x in v)
+    check.__doc__ = f"a list of {n} numbers"
+    return check
+
+
+def _num_or_vec(n):
+    vec = _vec(n)
+
+    def check(v):
+        return _num(v) or vec(v)
+    check.__doc__ = f"a number or a list of {n} numbers"
+    return check
+
+
+def _of(t, doc):
+    def check(v):
+        return isinstance(v, t) and not (t in (int, (int, float)) and isinstance(v, bool))
+    check.__doc__ = doc
+    return check
+
+
+def _choice(names):
+    def check(v):
+        return isinstance(v, str) and v in names
+    check.__doc__ = f"one of {sorted(names)}"
+    return check
+
+
+NUM, INT, STR, BOOL = (_of((int, float), "a number"), _of(int, "an integer"),
+                       _of(str, "a string"), _of(bool, "a boolean"))
+VEC3 = _vec(3)
+
+TOP = {"name": STR, "description": STR, "texture_resolution": INT, "shadows": BOOL,
+       "camera": None, "materials": None, "meshes": None, "lights": None, "effects": None}
+CAMERA = {"eye": VEC3, "target": VEC3, "up": VEC3, "fov_y_deg": NUM, "near": NUM, "far": NUM}
+MATERIAL = {"name": STR, "albedo": VEC3, "specular": VEC3, "shininess": NUM, "roughness": NUM,
+            "brdf": _choice(BRDF_NAMES), "texture": STR, "normal_map": STR, "alpha": NUM,
+            "alpha_tested": BOOL, "alpha_cutoff": NUM, "emissive": VEC3,
+            "procedural": _choice(PROCEDURAL_NAMES), "stripe_resolution": NUM}
+MESH = {"file": STR, "primitive": _choice({"plane", "box", "sphere"}), "size": _num_or_vec(3),
+        "subdivisions": INT, "uv_scale": _vec(2), "material": STR, "translate": VEC3,
+        "rotate_deg": VEC3, "scale": _num_or_vec(3), "velocity": VEC3}
+LIGHT = {"type": _choice({"directional", "point", "ambient"}), "direction": VEC3,
+         "irradiance": _num_or_vec(3), "position": VEC3, "intensity": _num_or_vec(3),
+         "radiance": _num_or_vec(3)}
+LIGHT_KEYS = {"directional": ("direction", "irradiance"), "point": ("position", "intensity"),
+              "ambient": ("radiance",)}
+EFFECTS = {k: (BOOL if t in (bool, "bool") else INT if t in (int, "int") else
+               NUM if t in (float, "float") else _of(list, "a list of BRDF names"))
+           for k, t in EFFECT_FIELDS.items()}
+
+
+def _check_table(path, prefix, table, schema, required=()):
+    if not isinstance(table, dict):
+        raise SceneConfigError(path, prefix, "must be a table")
+    for key, value in table.items():
+        full = f"{prefix}.{key}" if prefix else key
+        if key not in schema:
+            raise SceneConfigError(path, full, f"unknown key; allowed: {', '.join(sorted(schema))}")
+        check = schema[key]
+        if check is not None and not check(value):
+            raise SceneConfigError(path, full, f"must be {check.__doc__}, got {value!r}")
+    for key in required:
+        if key not in table:
+            raise SceneConfigError(path, f"{prefix}.{key}" if prefix else key, "missing required key")
+
+
+def _array_of_tables(path, data, key):
+    items = data.get(key, [])
+    if not isinstance(items, list) or not all(isinstance(t, dict) for t in items):
+        raise SceneConfigError(path, key, "must be an array of tables ([[%s]])" % key)
+    return items
+
+
+def _file(path, key, name):
+    f = (Path(path).parent / name).resolve()
+    if not f.is_file():
+        raise SceneConfigError(path, key, f"file {name!r} not found (looked for {f})")
+    return f
+
+
+def _rgb(v):
+    return tuple(float(x) for x in np.broadcast_to(np.asarray(v, np.float64), (3,)))
+
+
+def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise SceneConfigError(path, "<file>", "scene file not found") from None
+    except tomllib.TOMLDecodeError as e:
+        raise SceneConfigError(path, "<syntax>", f"not valid TOML: {e}") from None
+
+    _check_table(path, "", data, TOP, required=("camera", "meshes"))
+    _check_table(path, "camera", data["camera"], CAMERA, required=("eye", "target"))
+    cam_kw = {k: data["camera"][k] for k in ("up", "fov_y_deg", "near", "far") if k in data["camera"]}
+    try:
+        camera = look_at(data["camera"]["eye"], data["camera"]["target"], **cam_kw)
+    except ValueError as e:
+        raise SceneConfigError(path, "camera", str(e)) from None
+
+    materials, textures, by_name = [], [], {}
+    image_index: dict[tuple, int] = {}
+
+    def image(key, name, srgb):
+        f = _file(path, key, name)
+        if (f, srgb) not in image_index:
+            import imageio.v3 as iio
+            try:
+                img = iio.imread(f)
+            except Exception as e:  # noqa: BLE001 - any decoder failure names the key
+                raise SceneConfigError(path, key, f"cannot read image {name!r}: {e}") from None
+            image_index[(f, srgb)] = len(textures)
+            textures.append(as_rgba(img, srgb=srgb))
+        return image_index[(f, srgb)]
+
+    for i, m in enumerate(_array_of_tables(path, data, "materials")):
+        pre = f"materials[{i}]"
+        _check_table(path, pre, m, MATERIAL, required=("name",))
+        if m["name"] in by_name:
+            raise SceneConfigError(path, f"{pre}.name", f"duplicate material name {m['name']!r}")
+        kw = dict(m)
+        for k in ("albedo", "specular", "emissive"):
+            if k in kw:
+                kw[k] = _rgb(kw[k])
+        if "texture" in kw:
+            kw["texture"] = image(f"{pre}.texture", kw["texture"], srgb=True)
+        if "normal_map" in kw:
+            kw["normal_map"] = image(f"{pre}.normal_map", kw["normal_map"], srgb=False)
+        by_name[m["name"]] = len(materials)
+        materials.append(Material(**kw))
+
+    parts = []
+    meshes = _array_of_tables(path, data, "meshes")
+    if not meshes:
+        raise SceneConfigError(path, "meshes", "at least one [[meshes]] entry is required")
+    for i, m in enumerate(meshes):
+        pre = f"meshes[{i}]"
+        _check_table(path, pre, m, MESH)
+        if ("file" in m) == ("primitive" in m):
+            raise SceneConfigError(path, pre, "give exactly one of 'file' or 'primitive'")
+        mat = None
+        if "material" in m:
+            if m["material"] not in by_name:
+                raise SceneConfigError(path, f"{pre}.material",
+                                       f"unknown material {m['material']!r}; known: {sorted(by_name)}")
+            mat = by_name[m["material"]]
+        if "file" in m:
+            f = _file(path, f"{pre}.file", m["file"])
+            try:
+                got = load_mesh_file(f, materials, textures)
+            except Exception as e:  # noqa: BLE001
+                raise SceneConfigError(path, f"{pre}.file", f"cannot load mesh {m['file']!r}: {e}") from None
+        else:
+            if mat is None:
+                if not materials:
+                    materials.append(Material())
+                mat = 0
+            got = [_primitive(path, pre, m)]
+        xf = trs_matrix(m.get("translate", (0, 0, 0)), m.get("rotate_deg", (0, 0, 0)), m.get("scale", 1.0))
+        for p in got:
+            p = p.transformed(xf)
+            if mat is not None:
+                p.material = mat
+            if "velocity" in m:
+                p.velocity = np.asarray(m["velocity"], np.float64)
+            parts.append(p)
+
+    directional, point, ambient = [], [], np.zeros(3)
+    for i, lt in enumerate(_array_of_tables(path, data, "lights")):
+        pre = f"lights[{i}]"
+        _check_table(path, pre, lt, LIGHT, required=("type",))
+        need = LIGHT_KEYS[lt["type"]]
+        for k in lt:
+            if k != "type" and k not in need:
+                raise SceneConfigError(path, f"{pre}.{k}", f"not a key of a {lt['type']} light; "
+                                       f"allowed: {', '.join(need)}")
+        for k in need:
+            if k not in lt:
+                raise SceneConfigError(path, f"{pre}.{k}", "missing required key")
+        if lt["type"] == "directional":
+            if np.linalg.norm(lt["direction"]) == 0:
+                raise SceneConfigError(path, f"{pre}.direction", "must not be zero")
+            directional.append((lt["direction"], lt["irradiance"]))
+        elif lt["type"] == "point":
+            point.append((lt["position"], lt["intensity"]))
+        else:
+            ambient = ambient + np.asarray(_rgb(lt["radiance"]))
+
+    eff = dict(data.get("effects", {}))
+    _check_table(path, "effects", eff, EFFECTS)
+    if "brdfs" in eff:
+        bad = [b for b in eff["brdfs"] if b not in BRDF_NAMES]
+        if bad:
+            raise SceneConfigError(path, "effects.brdfs", f"unknown BRDF {bad[0]!r}")
+        eff["brdfs"] = tuple(BRDF_NAMES[b] for b in eff["brdfs"])
+    eff.update(effects or {})
+    try:
+        return build_scene(parts, materials, textures, make_lights(directional, point, ambient),
+                           camera, name=data.get("name", path.stem),
+                           description=data.get("description", ""),
+                           shadows=data.get("shadows", False), effects=eff,
+                           texture_resolution=data.get("texture_resolution"))
+    except (ValueError, KeyError) as e:
+        raise SceneConfigError(path, "<scene>", str(e)) from None
+
+
+def _primitive(path, pre, m):
+    kind, size, sub = m["primitive"], m.get("size"), m.get("subdivisions")
+    vals = None if size is None else np.atleast_1d(np.asarray(size, np.float64))
+    if kind == "plane":
+        if vals is not None and vals.size not in (1, 2, 3):
+            raise SceneConfigError(path, f"{pre}.size", "plane size is s or [w, d]")
+        wd = (1.0, 1.0) if vals is None else (vals[0], vals[min(1, vals.size - 1)])
+        n = sub or 1
+        return grid_plane(wd, (n, n), tuple(m.get("uv_scale", (1.0, 1.0))))
+    if "uv_scale" in m:
+        raise SceneConfigError(path, f"{pre}.uv_scale", "only planes take uv_scale")
+    if kind == "box":
+        if vals is not None and vals.size not in (1, 3):
+            raise SceneConfigError(path, f"{pre}.size", "box size is s or [w, h, d]")
+        return box(tuple(np.broadcast_to(vals if vals is not None else 1.0, (3,))))
+    radius = 1.0 if vals is None else float(vals[0])
+    n = sub or 16
+    return uv_sphere(radius, n, 2 * n)

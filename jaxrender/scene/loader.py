@@ -1,0 +1,67 @@
+"""``load_scene``: a built-in name, a scene TOML file (or the stem of one in configs/scenes/),
+or a single mesh file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from jaxrender.scene.builtin import BUILTINS, builtin_scene
+from jaxrender.scene.camera import look_at
+from jaxrender.scene.config import load_scene_toml
+from jaxrender.scene.lights import make_lights
+from jaxrender.scene.mesh_io import load_mesh_file
+from jaxrender.scene.scene import Scene, build_scene, with_effects
+
+CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs" / "scenes"
+MESH_SUFFIXES = {".obj", ".ply", ".glb", ".gltf", ".stl", ".off"}
+
+
+def load_scene(name_or_path: str | Path, *, effects: dict | None = None,
+               shadow_map: bool = True, **size_params) -> Scene:
+    """Load a scene. ``effects`` overrides flags; ``size_params`` go to a built-in builder.
+
+    When the scene's effects ask for shadows and ``shadow_map`` is True the shadow map is
+    rendered here (``jaxrender.shading.with_shadow_map``), so ``shade`` can use it at once.
+    """
+    key = str(name_or_path)
+    if key in BUILTINS:
+        scene = builtin_scene(key, **size_params)
+        if effects:
+            scene = with_effects(scene, **effects)
+    else:
+        if size_params:
+            raise TypeError(f"load_scene({key!r}): size parameters {sorted(size_params)} apply to "
+                            f"built-in scenes only ({', '.join(BUILTINS)})")
+        path = Path(key)
+        if not path.exists() and (CONFIG_DIR / f"{key}.toml").is_file():
+            path = CONFIG_DIR / f"{key}.toml"
+        if path.suffix.lower() in MESH_SUFFIXES:
+            scene = _single_mesh_scene(path, effects)
+        elif path.suffix.lower() == ".toml" or path.exists():
+            scene = load_scene_toml(path, effects)
+        else:
+            raise FileNotFoundError(
+                f"load_scene: {key!r} is neither a built-in scene ({', '.join(BUILTINS)}) "
+                f"nor an existing file nor a scene in {CONFIG_DIR}")
+    if scene.effects.shadows and shadow_map:
+        from jaxrender.shading.shadow import with_shadow_map
+
+        scene = with_shadow_map(scene)
+    return scene
+
+
+def _single_mesh_scene(path: Path, effects) -> Scene:
+    if not path.is_file():
+        raise FileNotFoundError(f"load_scene: mesh file {path} not found")
+    materials, textures = [], []
+    parts = load_mesh_file(path, materials, textures)
+    pts = np.concatenate([p.positions for p in parts])
+    lo, hi = pts.min(0), pts.max(0)
+    centre, radius = (lo + hi) / 2, max(float(np.linalg.norm(hi - lo)) / 2, 1e-3)
+    cam = look_at(centre + np.array([0.3, 0.4, 1.0]) * 2.0 * radius, centre,
+                  near=radius * 0.01, far=radius * 10)
+    lights = make_lights([((0.4, 0.8, 0.45), 2.5)], ambient=0.1)
+    return build_scene(parts, materials, textures, lights, cam, name=path.stem,
+                       description=f"mesh file {path.name}", effects=effects)
