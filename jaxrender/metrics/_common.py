@@ -1,0 +1,138 @@
+"""Input checks, precision and reductions shared by every metric.
+
+Every public metric runs the same preamble on the host: shapes are checked, NaN inputs raise a
+ValueError naming the metric, and the arrays are cast to the requested float dtype. Float64 is
+only ever switched on inside ``precision(dtype)``, never globally.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+Array = jax.Array
+
+FLOAT_DTYPES = {np.dtype(np.float32): jnp.float32, np.dtype(np.float64): jnp.float64}
+
+
+def resolve_dtype(dtype) -> np.dtype:
+    dt = np.dtype(dtype)
+    if dt not in FLOAT_DTYPES:
+        raise ValueError(f"dtype must be float32 or float64, got {dt}")
+    return dt
+
+
+def precision(dtype) -> contextlib.AbstractContextManager:
+    """A context that enables 64-bit JAX for the duration of a float64 request only."""
+    if resolve_dtype(dtype) == np.float64:
+        return jax.enable_x64(True)
+    return contextlib.nullcontext()
+
+
+@jax.jit
+def _any_nan(x: Array) -> Array:
+    return jnp.any(jnp.isnan(x))
+
+
+def has_nan(x) -> bool:
+    """True where ``x`` holds a NaN. NumPy inputs are checked on the host; JAX arrays on their
+    device with a single boolean brought back (no copy of the images). Tracers cannot be
+    checked and are let through."""
+    if isinstance(x, jax.core.Tracer):
+        return False
+    if isinstance(x, jax.Array):
+        if not jnp.issubdtype(x.dtype, jnp.floating):
+            return False
+        return bool(_any_nan(x))
+    arr = np.asarray(x)
+    return bool(np.issubdtype(arr.dtype, np.floating) and np.isnan(arr).any())
+
+
+def as_float(x, dtype: np.dtype, name: str, what: str) -> Array:
+    """Check ``x`` for NaN and cast it to ``dtype`` (call inside ``precision(dtype)``)."""
+    if has_nan(x):
+        raise ValueError(f"{name}: input '{what}' contains NaN; metrics are undefined for NaN")
+    if isinstance(x, jax.Array):
+        return x.astype(dtype)
+    return jnp.asarray(np.asarray(x, dtype=dtype))
+
+
+def check_images(name: str, a, b, *, channels: int | None = 3, min_ndim: int = 3) -> None:
+    """Images are (..., H, W, C) with identical shapes; C == channels where one is required."""
+    sa, sb = tuple(np.shape(a)), tuple(np.shape(b))
+    if sa != sb:
+        raise ValueError(f"{name}: shapes differ: {sa} vs {sb}")
+    if len(sa) < min_ndim:
+        raise ValueError(f"{name}: expected (H, W, C) or (T, H, W, C) images, got shape {sa}")
+    if channels is not None and sa[-1] != channels:
+        raise ValueError(f"{name}: expected {channels} channels in the last axis, got {sa}")
+    if 0 in sa:
+        raise ValueError(f"{name}: empty image of shape {sa}")
+
+
+def prepare(name: str, a, b, dtype, *, channels: int | None = 3) -> tuple[Array, Array]:
+    """The common preamble: shape checks, NaN checks, cast. Call inside ``precision(dtype)``."""
+    check_images(name, a, b, channels=channels)
+    dt = resolve_dtype(dtype)
+    return as_float(a, dt, name, "a"), as_float(b, dt, name, "b")
+
+
+def spatial_mean(x: Array, naxes: int) -> Array:
+    """Mean over the last ``naxes`` axes, one axis at a time: each partial sum stays short, so
+    float32 accumulation over a 1080p frame keeps close to float64 accuracy."""
+    for _ in range(naxes):
+        x = jnp.mean(x, axis=-1)
+    return x
+
+
+def broadcast_taps(taps: Array, ndim: int, axis: int) -> Array:
+    """(n,) or (n, C) tap table reshaped so that ``taps[k]`` broadcasts against an array of rank
+    ``ndim`` filtered along ``axis`` (explicit shapes, as strict rank promotion requires)."""
+    n = taps.shape[0]
+    if taps.ndim == 1:
+        return taps.reshape((n,) + (1,) * ndim)
+    shape = [1] * ndim
+    shape[-1] = taps.shape[1]
+    return taps.reshape((n,) + tuple(shape))
+
+
+def correlate_valid(x: Array, taps: Array, axis: int) -> Array:
+    """1-D correlation along ``axis`` over the valid region: out[i] = sum_k taps[k] x[i + k].
+
+    Written as a sum of shifted slices (not a convolution primitive) so it is elementwise in
+    the working precision on every backend (no TF32) and fuses into one loop. ``taps`` is
+    (n,) or (n, C) for per-channel taps along the last axis of ``x``."""
+    n = taps.shape[0]
+    axis = axis % x.ndim
+    length = x.shape[axis] - n + 1
+    t = broadcast_taps(taps.astype(x.dtype), x.ndim, axis)
+    acc = t[0] * jax.lax.slice_in_dim(x, 0, length, axis=axis)
+    for k in range(1, n):
+        acc = acc + t[k] * jax.lax.slice_in_dim(x, k, k + length, axis=axis)
+    return acc
+
+
+def pad_axis(x: Array, radius: int, axis: int, mode: str) -> Array:
+    axis = axis % x.ndim
+    widths = [(0, 0)] * x.ndim
+    widths[axis] = (radius, radius)
+    return jnp.pad(x, widths, mode=mode)
+
+
+def map_frames(fn, arrays: tuple[Array, ...], batch_size: int):
+    """Apply ``fn`` (which accepts a leading frame axis) to frames of (..., H, W, C) arrays,
+    ``batch_size`` frames at a time so that 60 1080p frames never hold every intermediate at
+    once. Leading axes are flattened and restored on the outputs."""
+    lead = arrays[0].shape[:-3]
+    if not lead:
+        return fn(*arrays)
+    n = int(np.prod(lead))
+    flat = tuple(a.reshape((n,) + a.shape[-3:]) for a in arrays)
+    if n <= batch_size:
+        out = fn(*flat)
+    else:
+        out = jax.lax.map(lambda xs: fn(*xs), flat, batch_size=batch_size)
+    return jax.tree.map(lambda o: o.reshape(lead + o.shape[1:]), out)
