@@ -1,0 +1,12 @@
+"""Figures: one pure function per figure (``plots``), one style file, deterministic saving."""
+
+from jaxrender.figures.io import STYLE, save_figure, to_display  # noqa: F401
+from jaxrender.figures.plots import (  # noqa: F401
+    fig_dacs_decisions,
+    fig_image_grid,
+    fig_object_space_marking,
+    fig_pareto,
+    fig_summary_table,
+    fig_temporal,
+    fig_visbuffer_waves,
+)

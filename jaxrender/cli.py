@@ -1,0 +1,254 @@
+"""The ``jaxrender`` command. ``jaxrender COMMAND --help`` describes each command.
+
+A user's mistake (a bad study file, an unknown scene or pipeline, a missing run directory)
+prints one line to stderr and exits with status 2, without a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tomllib
+from pathlib import Path
+
+from jaxrender.study.errors import StudyError, UserError
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, status 2
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _resolution(text: str):
+    from jaxrender.study.schema import parse_resolution
+
+    try:
+        return parse_resolution(text, "--resolution")
+    except UserError as e:
+        raise argparse.ArgumentTypeError(str(e).split(": ", 1)[1]) from None
+
+
+def _positive(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return n
+
+
+# ------------------------------------------------------------------ commands
+
+
+def cmd_study(a) -> int:
+    from jaxrender.study.runner import run_study
+    from jaxrender.study.schema import load_study
+
+    study = load_study(a.file).with_overrides(frames=a.frames, resolution=a.resolution)
+    out = Path(a.out) if a.out else Path("runs") / study.name
+    print(f"study {study.name}: {len(study.scenes)} scene(s), {len(study.paths)} camera "
+          f"path(s), {len(study.variants)} pipeline variant(s) at {study.resolution[0]}x"
+          f"{study.resolution[1]} -> {out}")
+    run_study(study, out, force=a.force, progress=not a.no_progress,
+                    figures=not a.no_figures)
+    print(f"results: {out / 'results.csv'}")
+    return 0
+
+
+def cmd_validate(a) -> int:
+    from jaxrender.study.schema import load_study
+
+    s = load_study(a.file)
+    frames = sum(p.frames for p in s.paths) * len(s.scenes) * len(s.variants)
+    print(f"{a.file}: ok ({len(s.scenes)} scene(s), {len(s.paths)} path(s), "
+          f"{len(s.variants)} variant(s), {frames} frames to render)")
+    return 0
+
+
+def cmd_figures(a) -> int:
+    from jaxrender.figures.make import render_figures
+    from jaxrender.study.schema import FIGURES
+
+    run = Path(a.run_dir)
+    if not (run / "results.csv").exists():
+        raise UserError(f"{run}: not a study output directory (no results.csv)")
+    for n in a.only or ():
+        if n not in FIGURES:
+            raise UserError(f"--only: unknown figure {n!r}; known: {', '.join(FIGURES)}")
+    render_figures(run, tuple(a.only) if a.only else FIGURES)
+    return 0
+
+
+def cmd_scenes(a) -> int:
+    from jaxrender.study import backend
+
+    rows = backend.builtin_scenes()
+    width = max((len(n) for n, _ in rows), default=0)
+    for name, desc in rows:
+        print(f"{name.ljust(width)}  {desc}")
+    files = sorted(Path("configs/scenes").glob("*.toml"))
+    for f in files:
+        print(f"{str(f).ljust(width)}  (scene file)")
+    return 0
+
+
+def cmd_pipelines(a) -> int:
+    from jaxrender.pipelines.registry import list_pipelines
+
+    pipes = list_pipelines()
+    if not pipes:
+        print("(no pipelines registered yet)")
+    width = max((len(p.name) for p in pipes), default=0)
+    for p in pipes:
+        print(f"{p.name.ljust(width)}  {p.description}")
+    return 0
+
+
+def _parse_sets(items) -> dict:
+    out = {}
+    for item in items or ():
+        if "=" not in item:
+            raise UserError(f"--set {item!r}: expected key=value")
+        k, v = item.split("=", 1)
+        k = k.strip()
+        try:
+            out[k] = tomllib.loads(f"v = {v}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[k] = v  # a bare word is a string
+    return out
+
+
+def cmd_render(a) -> int:
+    import matplotlib.image
+
+    from jaxrender.figures.io import to_display
+    from jaxrender.study import backend, timing
+    from jaxrender.study.runner import _py
+    from jaxrender.study.schema import _Checker, check_params
+
+    w, h = a.resolution or (320, 180)
+    params = check_params(_Checker("--set"), "", a.pipeline, _parse_sets(a.set), (w, h))
+    scene = backend.load_scene(a.scene, {})
+    camera = backend.default_camera(scene)
+    pipe = backend.pipeline(a.pipeline)
+    cfg = backend.make_config(a.pipeline, w, h, params)
+    comp = timing.compile_render(pipe.render, scene, camera, cfg)
+    frame, ms, _ = timing.time_call(comp.call, scene, camera, repeats=a.repeats, warmup=1)
+    import numpy as np
+
+    img = np.asarray(frame.image, np.float32)
+    out = Path(a.output)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    matplotlib.image.imsave(out, to_display(img))
+    counts = {k: _py(v) for k, v in (frame.counts or {}).items()}
+    counts = {k: v for k, v in counts.items() if v is not None}
+    if a.json:
+        print(json.dumps({"image": str(out), "scene": a.scene, "pipeline": a.pipeline,
+                          "params": params, "width": w, "height": h, "time_ms": ms,
+                          "compile_ms": comp.compile_ms, "counts": counts}, sort_keys=True))
+    else:
+        print(f"wrote {out} ({w}x{h}, {a.pipeline}, {ms:.2f} ms)")
+        for k in sorted(counts):
+            print(f"  {k}: {counts[k]}")
+    return 0
+
+
+def cmd_reference(a) -> int:
+    from jaxrender.study import cache
+
+    if a.action == "clear":
+        n = cache.clear()
+        print(f"removed {n} cached reference frame(s) from {cache.cache_dir()}")
+    elif a.action == "info":
+        print(json.dumps(cache.info(), indent=2))
+    else:
+        from jaxrender.study.schema import load_study
+
+        study = load_study(a.study).with_overrides(frames=a.frames, resolution=a.resolution)
+        n = cache.rebuild(study)
+        print(f"rebuilt {n} reference frame(s) in {cache.cache_dir()}")
+    return 0
+
+
+# ------------------------------------------------------------------ the parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="jaxrender", description="Study real-time shading architectures in JAX.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    s = sub.add_parser("study", help="run a study file", description=(
+        "Render every (scene, camera path, pipeline variant, frame) of a study, score it "
+        "against the cached reference, time it, and write results.jsonl, results.csv, the "
+        "resolved config and the figures. Rerunning resumes; --force recomputes."))
+    s.add_argument("file", help="the study TOML file, e.g. studies/quickstart.toml")
+    s.add_argument("--out", help="output directory (default runs/NAME)")
+    s.add_argument("--frames", type=_positive, help="frames per camera path (overrides)")
+    s.add_argument("--resolution", type=_resolution, help="WxH (overrides)")
+    s.add_argument("--force", action="store_true", help="discard stored rows and recompute")
+    s.add_argument("--no-figures", action="store_true", help="do not draw figures")
+    s.add_argument("--no-progress", action="store_true", help="no progress bar")
+    s.set_defaults(fn=cmd_study)
+
+    s = sub.add_parser("validate", help="check a study file without running it",
+                       description="Validate a study file and print what it would render.")
+    s.add_argument("file")
+    s.set_defaults(fn=cmd_validate)
+
+    s = sub.add_parser("figures", help="redraw the figures of a run directory",
+                       description="Redraw the figures from stored results, without rendering.")
+    s.add_argument("run_dir", help="a study output directory (holding results.csv)")
+    s.add_argument("--only", nargs="+", metavar="NAME", help="draw only these figures")
+    s.set_defaults(fn=cmd_figures)
+
+    s = sub.add_parser("scenes", help="list the built-in scenes",
+                       description="List the built-in scenes and scene files in configs/scenes.")
+    s.set_defaults(fn=cmd_scenes)
+
+    s = sub.add_parser("pipelines", help="list the registered pipelines",
+                       description="List the registered pipelines, one line each.")
+    s.set_defaults(fn=cmd_pipelines)
+
+    s = sub.add_parser("render", help="render one frame to a PNG", description=(
+        "Render one frame of SCENE from its default camera with one pipeline, write the image "
+        "and print the counts."))
+    s.add_argument("scene", help="a built-in scene name or a scene TOML file")
+    s.add_argument("--pipeline", required=True, help="a registered pipeline type")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="a pipeline parameter (value in TOML syntax); repeatable")
+    s.add_argument("--resolution", type=_resolution, help="WxH (default 320x180)")
+    s.add_argument("--repeats", type=_positive, default=3, help="timed repeats (median)")
+    s.add_argument("-o", "--output", required=True, help="the PNG to write")
+    s.add_argument("--json", action="store_true", help="print the counts as JSON")
+    s.set_defaults(fn=cmd_render)
+
+    s = sub.add_parser("reference", help="manage the reference cache", description=(
+        "The reference cache ($JAXRENDER_CACHE or ~/.cache/jaxrender/reference)."))
+    rsub = s.add_subparsers(dest="action", required=True, parser_class=_Parser)
+    r = rsub.add_parser("rebuild", help="re-render the reference frames of a study",
+                        description="Delete and re-render the reference frames a study uses.")
+    r.add_argument("study", help="the study TOML file")
+    r.add_argument("--frames", type=_positive)
+    r.add_argument("--resolution", type=_resolution)
+    r.set_defaults(fn=cmd_reference)
+    r = rsub.add_parser("clear", help="delete every cached reference",
+                        description="Delete every cached reference frame.")
+    r.set_defaults(fn=cmd_reference)
+    r = rsub.add_parser("info", help="where the cache is and how big",
+                        description="Print the cache location, entry count and code version.")
+    r.set_defaults(fn=cmd_reference)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.fn(args)
+    except (UserError, StudyError) as e:
+        print(f"jaxrender: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("jaxrender: interrupted; rerun the same command to resume", file=sys.stderr)
+        return 130

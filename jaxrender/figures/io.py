@@ -1,0 +1,46 @@
+"""Figure creation in the one style, and deterministic saving (PNG + PDF)."""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+import matplotlib
+import matplotlib.style
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+STYLE = str(Path(__file__).with_name("jaxrender.mplstyle"))
+
+
+@contextlib.contextmanager
+def style():
+    with matplotlib.style.context(STYLE), matplotlib.rc_context({"svg.hashsalt": "jaxrender"}):
+        yield
+
+
+def new_figure(width_in: float, height_in: float) -> Figure:
+    """A figure outside pyplot's global state, with an Agg canvas."""
+    fig = Figure(figsize=(width_in, height_in), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def save_figure(fig: Figure, stem) -> list[Path]:
+    """Write ``stem.png`` and ``stem.pdf``; equal figures give equal bytes (no dates, no
+    software version in the metadata, a fixed hash salt)."""
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
+    with style():
+        fig.savefig(png, format="png", metadata={"Software": None})
+        fig.savefig(pdf, format="pdf", metadata={"CreationDate": None, "ModDate": None,
+                                                  "Producer": None, "Creator": None})
+    return [png, pdf]
+
+
+def to_display(linear: np.ndarray) -> np.ndarray:
+    """Linear RGB -> clamp -> sRGB encode, as the LDR metrics see images."""
+    x = np.clip(np.nan_to_num(np.asarray(linear, np.float32), nan=0.0), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)

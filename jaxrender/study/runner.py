@@ -1,0 +1,328 @@
+"""Run a study: render every (scene, camera path, pipeline variant, frame), score it against
+the cached reference, time it and append its rows; then export, summarise and draw figures.
+
+The output directory holds ``results.jsonl`` (the store), ``results.csv``, ``study.toml`` (the
+resolved config), ``environment.json`` (device, jax version, code version), ``summary.csv``,
+``images/`` (small npz files of a few frames for the figures) and ``figures/``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from jaxrender.study import backend, cache, schema, store, timing
+from jaxrender.study.schema import Study
+
+
+@dataclass
+class RunResult:
+    out_dir: Path
+    rows: list
+    computed: int  # sequences rendered in this run
+    skipped: int  # sequences already complete in the store
+    summary: list
+    warnings: list = field(default_factory=list)
+    figures: list = field(default_factory=list)
+
+
+def _slug(s: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "-", s).strip("-") or "x"
+
+
+def _scene_and_cameras(spec, path, resolution):
+    scene = backend.load_scene(spec.source, dict(spec.params))
+    return scene, backend.make_cameras(scene, path, *resolution)
+
+
+def _py(v):
+    """A count as a plain JSON number (None when it is not a scalar)."""
+    a = np.asarray(v)
+    if a.size != 1:
+        return None
+    x = a.reshape(()).item()
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, int):
+        return int(x)
+    return float(x)
+
+
+def reference_frames(scene, spec, cams, ref, resolution) -> list[dict]:
+    """The reference frame of each camera, from the cache or rendered and cached."""
+    out, compiled = [], None
+    for cam in cams:
+        key = cache.reference_key(spec, cam, ref, resolution)
+        arrays = cache.load(key)
+        if arrays is None:
+            if compiled is None:
+                pipe = backend.pipeline(ref.pipeline)
+                cfg = backend.make_config(ref.pipeline, *resolution, dict(ref.params))
+                compiled = timing.compile_render(pipe.render, scene, cam, cfg)
+            frame = compiled.call(scene, cam)
+            arrays = {"image": np.asarray(frame.image, np.float32)}
+            conv = frame.counts.get("convergence_psnr") if frame.counts else None
+            if conv is not None:
+                arrays["convergence_psnr"] = np.float64(_py(conv))
+            cache.save(key, arrays)
+        out.append(arrays)
+    return out
+
+
+def hardest_crop(error: np.ndarray, size: int) -> tuple[int, int, int, int]:
+    """(y0, x0, h, w) of the size x size window with the largest summed error."""
+    h, w = error.shape
+    s = max(1, min(size, h, w))
+    ii = np.pad(np.cumsum(np.cumsum(error.astype(np.float64), 0), 1), ((1, 0), (1, 0)))
+    sums = ii[s:, s:] - ii[:-s, s:] - ii[s:, :-s] + ii[:-s, :-s]
+    y0, x0 = np.unravel_index(int(np.argmax(sums)), sums.shape)
+    return int(y0), int(x0), s, s
+
+
+def _save_npz(path: Path, meta: dict, **arrays) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp.npz")
+    with open(tmp, "wb") as f:
+        np.savez_compressed(f, meta=np.array(json.dumps(meta, sort_keys=True)), **arrays)
+    tmp.replace(path)
+
+
+def _small(a) -> np.ndarray:
+    a = np.asarray(a)
+    if a.dtype.kind == "f":
+        return a.astype(np.float16)
+    if a.dtype.kind == "b":
+        return a.astype(np.uint8)
+    if a.dtype.kind in "iu" and a.size and a.min() >= -32768 and a.max() < 32768:
+        return a.astype(np.int16)
+    return a
+
+
+def _seq(study: Study, spec, path, variant) -> str:
+    ref = study.reference
+    return store.seq_key(
+        [spec.source, spec.params, spec.file_hash], [path.name, path.type, path.frames,
+                                                     path.params],
+        [variant.label, variant.type, variant.params_json], study.resolution,
+        [ref.pipeline, ref.params], sorted(study.metrics),
+    )
+
+
+def run_sequence(study: Study, scene, spec, path, cams, variant, refs, env, out_dir: Path,
+                 progress=None) -> list[dict]:
+    """Render, time and score one sequence; returns its rows (not yet stored)."""
+    w, h = study.resolution
+    pipe = backend.pipeline(variant.type)
+    cfg = backend.make_config(variant.type, w, h, dict(variant.params))
+    comp = timing.compile_render(pipe.render, scene, cams[0], cfg)
+    first_ms = None
+    if comp.method == "first_call":
+        t0 = time.perf_counter()
+        timing._block(comp.call(scene, cams[0]))
+        first_ms = (time.perf_counter() - t0) * 1e3
+    for _ in range(study.timing.warmup):
+        timing._block(comp.call(scene, cams[0]))
+    seq = _seq(study, spec, path, variant)
+    rows, images = [], []
+    for t, cam in enumerate(cams):
+        frame, ms, _ = timing.time_call(comp.call, scene, cam, repeats=study.timing.repeats)
+        img = np.asarray(frame.image, np.float32)
+        ref = np.asarray(refs[t]["image"], np.float32)
+        if img.shape != ref.shape:
+            raise ValueError(f"pipeline {variant.label!r} returned an image of shape "
+                             f"{img.shape}, the reference is {ref.shape}")
+        images.append(img)
+        counts = {k: _py(v) for k, v in (frame.counts or {}).items()}
+        counts = {k: v for k, v in counts.items() if v is not None}
+        finite = bool(np.all(np.isfinite(img))) and all(
+            math.isfinite(v) for v in counts.values() if isinstance(v, float))
+        metrics, err = backend.frame_metrics(img, ref, study.metrics)
+        row = {
+            "seq": seq, "scene": spec.label, "camera_path": path.name,
+            "pipeline": variant.label, "pipeline_type": variant.type,
+            "params": dict(variant.params), "frame": t, "width": w, "height": h,
+            **metrics, **counts, "time_ms": ms, "compile_ms": comp.compile_ms,
+            "compile_method": comp.method, "finite": finite, **env,
+        }
+        if "convergence_psnr" in refs[t]:
+            row["reference_convergence_psnr"] = float(refs[t]["convergence_psnr"])
+        rows.append(row)
+        if t in study.save_frames:
+            meta = {k: row[k] for k in ("scene", "camera_path", "pipeline", "pipeline_type",
+                                         "params", "frame", "seq")}
+            aux = {f"aux_{k}": _small(v) for k, v in (frame.aux or {}).items()
+                   if np.asarray(v).ndim >= 1}
+            stem = f"{_slug(spec.label)}__{_slug(path.name)}__{seq}__f{t}"
+            _save_npz(out_dir / "images" / f"{stem}.npz", meta, image=_small(img),
+                      error=_small(err), **aux)
+            ref_stem = f"{_slug(spec.label)}__{_slug(path.name)}__reference__f{t}"
+            if not (out_dir / "images" / f"{ref_stem}.npz").exists():
+                _save_npz(out_dir / "images" / f"{ref_stem}.npz",
+                          {"scene": spec.label, "camera_path": path.name,
+                           "pipeline": "reference", "frame": t}, image=_small(ref))
+        if progress is not None:
+            progress.update(1)
+    if comp.method == "first_call":
+        med = float(np.median([r["time_ms"] for r in rows]))
+        for r in rows:
+            r["compile_ms"] = max(0.0, first_ms - med)
+    seq_metrics, per_frame = backend.sequence_metrics(
+        np.stack(images), np.stack([np.asarray(r["image"], np.float32) for r in refs]),
+        study.metrics)
+    for r, te in zip(rows, per_frame):
+        r.update(seq_metrics)
+        r["temporal_error_frame"] = te
+    return rows
+
+
+# ------------------------------------------------------------------ summary
+
+
+SUMMARY_COLUMNS = ("psnr", "mssim", "flip", "temporal_error", "shade_invocations", "time_ms")
+
+
+def summarize(rows: list[dict]) -> list[dict]:
+    """Mean over scenes, paths and frames per (pipeline label, parameters)."""
+    groups: dict = {}
+    for r in rows:
+        key = (r["pipeline"], json.dumps(r.get("params", {}), sort_keys=True))
+        groups.setdefault(key, []).append(r)
+    out = []
+    for (label, params), rs in sorted(groups.items()):
+        entry = {"pipeline": label, "params": params, "rows": len(rs)}
+        for c in SUMMARY_COLUMNS:
+            vals = [r[c] for r in rs if isinstance(r.get(c), (int, float))
+                    and not isinstance(r.get(c), bool) and not math.isnan(r[c])]
+            entry[c] = float(np.mean(vals)) if vals else float("nan")
+        out.append(entry)
+    return out
+
+
+def format_summary(summary: list[dict]) -> str:
+    heads = ["pipeline", "PSNR", "MSSIM", "FLIP", "temporal", "invocations", "time ms"]
+    lines = []
+    for e in summary:
+        name = e["pipeline"] + ("" if e["params"] == "{}" else " " + e["params"])
+        lines.append([name] + [_fmt(e[c], c) for c in SUMMARY_COLUMNS])
+    widths = [max(len(x) for x in col) for col in zip(heads, *lines)]
+    fmt = lambda cells: "  ".join(  # noqa: E731
+        c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
+    return "\n".join([fmt(heads), fmt(["-" * w for w in widths])] + [fmt(r) for r in lines])
+
+
+def _fmt(v: float, col: str) -> str:
+    if isinstance(v, float) and math.isnan(v):
+        return "-"
+    if col == "shade_invocations":
+        return f"{v:,.0f}"
+    if col in ("mssim", "flip", "temporal_error"):
+        return f"{v:.4f}"
+    return f"{v:.2f}"
+
+
+def convergence_warnings(study: Study, rows: list[dict]) -> list[str]:
+    """A warning per scene whose reference is not min_margin_db above its best pipeline."""
+    if not study.reference.check_convergence:
+        return []
+    out = []
+    for spec in study.scenes:
+        rs = [r for r in rows if r["scene"] == spec.label]
+        conv = [r["reference_convergence_psnr"] for r in rs if "reference_convergence_psnr" in r]
+        psnr: dict = {}
+        for r in rs:
+            if isinstance(r.get("psnr"), float):
+                psnr.setdefault((r["pipeline"], json.dumps(r["params"], sort_keys=True)),
+                                []).append(r["psnr"])
+        if not conv or not psnr:
+            continue
+        best = max(float(np.mean(v)) for v in psnr.values())
+        if min(conv) < best + study.reference.min_margin_db:
+            out.append(f"reference for scene {spec.label!r} may not be converged: its "
+                       f"convergence estimate is {min(conv):.1f} dB, the best pipeline reaches "
+                       f"{best:.1f} dB (want a margin of {study.reference.min_margin_db:g} dB); "
+                       "raise the reference's sample count")
+    return out
+
+
+# ------------------------------------------------------------------ the whole study
+
+
+def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = True,
+              figures: bool = True, log=print) -> RunResult:
+    from tqdm import tqdm
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    env = timing.device_info()
+    store.atomic_write_text(out_dir / "study.toml", schema.to_toml(study))
+    store.atomic_write_text(out_dir / "environment.json", json.dumps(
+        {**env, "code_version": cache.code_version(), "study_file": study.file,
+         "date": time.strftime("%Y-%m-%d %H:%M:%S")}, indent=2) + "\n")
+    st = store.ResultStore(out_dir / "results.jsonl", force=force)
+    if st.dropped_bytes:
+        log(f"note: cut off a partial last line ({st.dropped_bytes} bytes) from an interrupted run")
+
+    plan = [(spec, path, v) for spec in study.scenes for path in study.paths
+            for v in study.variants]
+    seqs = {_seq(study, s, p, v) for s, p, v in plan}
+    todo = [(s, p, v) for s, p, v in plan if not st.complete(_seq(study, s, p, v), p.frames)]
+    skipped = len(plan) - len(todo)
+    if skipped:
+        log(f"{skipped} of {len(plan)} sequences already stored; computing {len(todo)}")
+    total = sum(p.frames for _, p, _ in todo)
+    bar = tqdm(total=total, unit="frame", disable=not progress or total == 0,
+               dynamic_ncols=True)
+    try:
+        for spec in study.scenes:
+            scene_todo = [(p, v) for s, p, v in todo if s is spec]
+            if not scene_todo:
+                continue
+            scene = backend.load_scene(spec.source, dict(spec.params))
+            for path in study.paths:
+                variants = [v for p, v in scene_todo if p is path]
+                if not variants:
+                    continue
+                cams = backend.make_cameras(scene, path, *study.resolution)
+                bar.set_description(f"{spec.label}/{path.name}: reference")
+                refs = reference_frames(scene, spec, cams, study.reference, study.resolution)
+                for v in variants:
+                    bar.set_description(f"{spec.label}/{path.name}: {v.label}")
+                    rows = run_sequence(study, scene, spec, path, cams, v, refs, env, out_dir,
+                                        progress=bar)
+                    st.append(rows)
+    finally:
+        bar.close()
+
+    rows = store.latest_rows(st.rows, seqs)
+    store.export_csv(rows, out_dir / "results.csv")
+    summary = summarize(rows)
+    _write_summary(summary, out_dir / "summary.csv")
+    log(format_summary(summary))
+    warns = convergence_warnings(study, rows)
+    for w in warns:
+        log(f"warning: {w}")
+    made = []
+    if figures:
+        from jaxrender.figures.make import render_figures
+
+        made = render_figures(out_dir, study.figures, log=log)
+    return RunResult(out_dir, rows, len(todo), skipped, summary, warns, made)
+
+
+def _write_summary(summary: list[dict], path: Path) -> None:
+    import csv
+    import io
+
+    cols = ["pipeline", "params", "rows", *SUMMARY_COLUMNS]
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(cols)
+    for e in summary:
+        w.writerow([e[c] for c in cols])
+    store.atomic_write_text(path, buf.getvalue())

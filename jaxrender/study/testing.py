@@ -1,0 +1,148 @@
+"""Test doubles for the study machinery: a tiny scene, two tiny pipelines and NumPy metrics.
+
+``install(monkeypatch)`` puts them in place for one test (the registry entries and backend
+functions are restored afterwards), so the runner, store, cache and figures can be tested end
+to end in seconds, before (and independently of) the real scenes, pipelines and metrics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.pipelines import registry
+from jaxrender.scene.camera import look_at
+from jaxrender.types import Frame, pytree_dataclass, static_field
+
+FAKE_SCENES = ("tiny", "tiny2")
+
+
+@pytree_dataclass
+class FakeScene:
+    color: jax.Array  # float32[3]
+    name: str = static_field(default="tiny")
+
+
+@dataclass(frozen=True)
+class FlatConfig(registry.RenderConfig):
+    levels: int = 8
+    noise: float = 0.0
+    dither: bool = False
+    mode: str = "nearest"
+    rates: tuple = (1, 1)
+
+    def __post_init__(self):
+        if self.levels < 1:
+            raise ValueError(f"levels must be >= 1, got {self.levels}")
+
+
+@dataclass(frozen=True)
+class RefConfig(registry.RenderConfig):
+    samples: int = 4
+
+
+def _base(scene, camera, w, h):
+    x = (jnp.arange(w, dtype=jnp.float32) + 0.5) / w
+    y = (jnp.arange(h, dtype=jnp.float32) + 0.5) / h
+    wave = 0.5 + 0.4 * jnp.sin(6.0 * x[None, :] + 3.0 * y[:, None] + camera.eye[0])
+    return wave[:, :, None] * scene.color[None, None, :]
+
+
+def render_reference(scene, camera, cfg: RefConfig) -> Frame:
+    """Fake ground truth: a smooth function of the pixel and the camera."""
+    img = _base(scene, camera, cfg.width, cfg.height)
+    return Frame(img, {"convergence_psnr": jnp.float32(80.0)}, {})
+
+
+def render_flat(scene, camera, cfg: FlatConfig) -> Frame:
+    """Fake pipeline: the reference quantised to ``levels`` plus a little patterned noise."""
+    w, h = cfg.width, cfg.height
+    img = jnp.floor(_base(scene, camera, w, h) * cfg.levels) / cfg.levels
+    ix = jnp.arange(w, dtype=jnp.int32)[None, :]
+    iy = jnp.arange(h, dtype=jnp.int32)[:, None]
+    pattern = jnp.sin(37.0 * ix.astype(jnp.float32) + 91.0 * iy.astype(jnp.float32)
+                      + 5.0 * camera.eye[0])
+    img = img + cfg.noise * pattern[:, :, None]
+    covered = w * h
+    inv = covered * min(cfg.levels, 16) // 16
+    waves = -(-inv // 32)
+    level = ((ix % 4) + (iy % 4)) % 5
+    counts = {
+        "shade_invocations": jnp.int32(inv),
+        "helper_lanes": jnp.int32(inv // 4),
+        "covered_pixels": jnp.int32(covered),
+        "waves": jnp.int32(waves),
+        "lane_utilization": jnp.float32(inv / max(1, waves * 32)),
+    }
+    aux = {
+        "level": level,
+        "shaded": level == 0,
+        "chunk_state": ((ix[:, :: 8] // 8 + iy[:: 8, :] // 8) % 3).astype(jnp.int32),
+        "mip_level": (ix.astype(jnp.float32) / w + iy.astype(jnp.float32) / h),
+    }
+    return Frame(img, counts, aux)
+
+
+# ------------------------------------------------------------------ NumPy metrics
+
+
+def _np_metrics():
+    def rmse(a, b):
+        return float(np.sqrt(np.mean((np.asarray(a) - np.asarray(b)) ** 2)))
+
+    def psnr(a, b):
+        m = np.mean((np.clip(a, 0, 1) - np.clip(b, 0, 1)) ** 2)
+        return float("inf") if m == 0 else float(10 * np.log10(1.0 / m))
+
+    def ssim(a, b):
+        return float(1.0 - np.mean(np.abs(np.asarray(a) - np.asarray(b))))
+
+    def flip(ref, test):
+        m = np.abs(np.asarray(test) - np.asarray(ref)).mean(-1)
+        return float(m.mean()), m
+
+    def delta_e2000(a, b):
+        return float(100 * np.mean(np.abs(np.asarray(a) - np.asarray(b)))), None
+
+    def temporal_error(i, r):
+        di, dr = np.diff(np.asarray(i), axis=0), np.diff(np.asarray(r), axis=0)
+        return float(np.mean(np.abs(di - dr)))
+
+    return dict(rmse=rmse, psnr=psnr, ssim=ssim, flip=flip, delta_e2000=delta_e2000,
+                temporal_error=temporal_error)
+
+
+def fake_cameras(scene, path, width, height):
+    step = dict(path.params).get("step", 0.05) if path.type == "fakepan" else 0.0
+    return [look_at((step * t, 0.5, 3.0), (step * t, 0.0, 0.0)) for t in range(path.frames)]
+
+
+def install(monkeypatch, *, metrics: bool = True):
+    """Register ``flat`` and ``reference`` (fakes) and fake scenes/paths for one test."""
+    import jaxrender.metrics
+    from jaxrender.study import backend
+
+    registry._load_builtin_pipelines()
+    monkeypatch.setitem(registry.REGISTRY, "flat",
+                        registry.Pipeline("flat", FlatConfig, render_flat, "fake: quantised"))
+    monkeypatch.setitem(registry.REGISTRY, "reference",
+                        registry.Pipeline("reference", RefConfig, render_reference,
+                                          "fake: smooth ground truth"))
+    colors = {"tiny": (1.0, 0.8, 0.6), "tiny2": (0.3, 0.9, 0.5)}
+
+    def load_scene(source, params):
+        return FakeScene(jnp.asarray(colors[source], jnp.float32), source)
+
+    monkeypatch.setattr(backend, "builtin_scene_names", lambda: list(FAKE_SCENES))
+    monkeypatch.setattr(backend, "builtin_scenes",
+                        lambda: [(n, f"fake scene {n}") for n in FAKE_SCENES])
+    monkeypatch.setattr(backend, "load_scene", load_scene)
+    monkeypatch.setattr(backend, "default_camera", lambda scene: look_at((0, 0.5, 3), (0, 0, 0)))
+    monkeypatch.setattr(backend, "path_types", lambda: ["static", "fakepan"])
+    monkeypatch.setattr(backend, "make_cameras", fake_cameras)
+    if metrics:
+        for name, fn in _np_metrics().items():
+            monkeypatch.setattr(jaxrender.metrics, name, fn, raising=False)
