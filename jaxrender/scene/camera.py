@@ -59,8 +59,9 @@ def look_at(eye, target, up=(0.0, 1.0, 0.0), *, fov_y_deg=60.0, near=0.1, far=10
 
 def world_to_view(points: Array, camera: Camera) -> Array:
     """float32[..., 3] world positions -> camera space (camera at the origin, looking down -Z)."""
-    d = points - camera.eye
-    return jnp.sum(d[..., None, :] * camera.rotation, axis=-1)
+    lead = (1,) * (points.ndim - 1)  # explicit broadcasting (rank promotion may be "raise")
+    d = points - camera.eye.reshape(lead + (3,))
+    return jnp.sum(d[..., None, :] * camera.rotation.reshape(lead + (3, 3)), axis=-1)
 
 
 def view_to_clip(view: Array, camera: Camera, aspect: float) -> Array:
