@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import logging
 from pathlib import Path
 
 import matplotlib
@@ -33,11 +34,23 @@ def save_figure(fig: Figure, stem) -> list[Path]:
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
+    # PDFs use the 14 standard fonts (no embedding: fast, small, deterministic); matplotlib
+    # logs each weight substitution for them, which says nothing useful here.
+    fm_log = logging.getLogger("matplotlib.font_manager")
+    level = fm_log.level
+    fm_log.setLevel(logging.ERROR)
+    try:
+        _save(fig, png, pdf)
+    finally:
+        fm_log.setLevel(level)
+    return [png, pdf]
+
+
+def _save(fig: Figure, png: Path, pdf: Path) -> None:
     with style():
         fig.savefig(png, format="png", metadata={"Software": None})
         fig.savefig(pdf, format="pdf", metadata={"CreationDate": None, "ModDate": None,
                                                   "Producer": None, "Creator": None})
-    return [png, pdf]
 
 
 def to_display(linear: np.ndarray) -> np.ndarray:

@@ -13,13 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from jaxrender.study.errors import Unavailable
+from jaxrender.study.errors import Unavailable, UserError
 
 # Metric names a study may ask for; counts are always recorded.
 METRICS = ("rmse", "psnr", "mssim", "flip", "delta_e", "temporal_error")
-# Camera path types handled here without jaxrender.scene.camera_path.
-BUILTIN_PATH_TYPES = ("static",)
-_CAMERA_PATH_TYPES = ("pan", "orbit", "dolly", "jitter")
 
 
 def _module(name: str, what: str):
@@ -66,11 +63,6 @@ def make_config(name: str, width: int, height: int, params: dict):
 # ---------------------------------------------------------------- scenes
 
 
-def builtin_scene_names() -> list[str]:
-    fn = _attr("jaxrender.scene", "list_builtin_scenes", "listing the built-in scenes")
-    return [entry[0] if isinstance(entry, (tuple, list)) else str(entry) for entry in fn()]
-
-
 def builtin_scenes() -> list[tuple[str, str]]:
     fn = _attr("jaxrender.scene", "list_builtin_scenes", "listing the built-in scenes")
     out = []
@@ -82,10 +74,32 @@ def builtin_scenes() -> list[tuple[str, str]]:
     return out
 
 
+def builtin_scene_names() -> list[str]:
+    return [name for name, _ in builtin_scenes()]
+
+
+def scene_params(name: str) -> dict | None:
+    """{size parameter: default} of a built-in scene's builder, or None when unknown."""
+    try:
+        from jaxrender.scene.builtin import BUILTINS
+    except ImportError:
+        return None
+    fn = BUILTINS.get(name)
+    if fn is None:
+        return None
+    return {p.name: p.default for p in inspect.signature(fn).parameters.values()
+            if p.kind is p.KEYWORD_ONLY or p.kind is p.POSITIONAL_OR_KEYWORD}
+
+
 def load_scene(source: str, params: dict) -> Any:
     """``source`` is a built-in name or a path to a scene TOML file."""
     fn = _attr("jaxrender.scene", "load_scene", "loading a scene")
-    return fn(source, **params)
+    try:
+        return fn(source, **params)
+    except (FileNotFoundError, TypeError) as e:
+        raise UserError(f"scene {source!r}: {e}") from None
+    except ValueError as e:  # SceneConfigError and friends: a bad scene file
+        raise UserError(f"scene {source!r}: {e}") from None
 
 
 def default_camera(scene):
@@ -95,36 +109,30 @@ def default_camera(scene):
 
 # ---------------------------------------------------------------- camera paths
 
+# Parameters of each camera path type a study may set: name -> (default or None if required,
+# expected Python type). "static" repeats the scene's default camera.
+PATH_PARAMS: dict[str, dict] = {
+    "static": {},
+    "pan": {"pixels_per_frame": (None, float), "direction": ("horizontal", str)},
+    "orbit": {"degrees_per_frame": (None, float), "distance": (4.0, float),
+              "center": ((), list), "radius": (0.0, float)},
+    "dolly": {"distance_per_frame": (None, float)},
+    "jitter": {"pattern": ("halton", str)},
+}
+
 
 def path_types() -> list[str]:
     """Camera path types a study may name: 'static' and those camera_path provides."""
-    types = list(BUILTIN_PATH_TYPES)
     try:
         cp = importlib.import_module("jaxrender.scene.camera_path")
     except ImportError:
-        return types
-    declared = getattr(cp, "PATH_TYPES", None)
-    if declared is not None:
-        names = list(declared)
-    elif hasattr(cp, "make_path"):
-        names = list(_CAMERA_PATH_TYPES)
-    else:
-        names = [t for t in _CAMERA_PATH_TYPES if callable(getattr(cp, t, None))]
-    return types + [t for t in names if t not in types]
-
-
-def _call_with(fn, args: tuple, kwargs: dict):
-    """Call fn with those keyword arguments it accepts (width/height/frames/scene are optional)."""
-    sig = inspect.signature(fn)
-    takes_any = any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values())
-    optional = {"width", "height", "scene", "aspect"}
-    kw = {k: v for k, v in kwargs.items() if k not in optional or takes_any or k in sig.parameters}
-    return fn(*args, **kw)
+        return ["static"]
+    return ["static"] + [t for t in PATH_PARAMS if t != "static" and callable(getattr(cp, t,
+                                                                                     None))]
 
 
 def _split_cameras(out, frames: int) -> list:
-    """Cameras from what a path function returns: a list of cameras, of (camera, previous)
-    pairs, or one Camera batched over a leading frame axis."""
+    """Cameras from a CameraPath (batched cameras), a list of cameras or (camera, previous)."""
     import jax
 
     if hasattr(out, "cameras"):
@@ -142,18 +150,31 @@ def _split_cameras(out, frames: int) -> list:
 def make_cameras(scene, path, width: int, height: int) -> list:
     """One camera per frame of ``path`` (a PathSpec), starting from the scene's default."""
     base = default_camera(scene)
+    n, params = path.frames, dict(path.params)
     if path.type == "static":
-        return [base] * path.frames
+        return [base] * n
     cp = _module("jaxrender.scene.camera_path", f"camera path {path.type!r}")
-    params = dict(path.params)
-    extra = {"width": width, "height": height, "scene": scene, "aspect": width / height}
-    if hasattr(cp, "make_path"):
-        out = _call_with(cp.make_path, (path.type, base, path.frames), {**params, **extra})
-    elif callable(getattr(cp, path.type, None)):
-        out = _call_with(getattr(cp, path.type), (base, path.frames), {**params, **extra})
+    if path.type == "pan":
+        out = cp.pan(base, n, float(params["pixels_per_frame"]), height,
+                     direction=params.get("direction", "horizontal"))
+    elif path.type == "dolly":
+        out = cp.dolly(base, n, float(params["distance_per_frame"]))
+    elif path.type == "jitter":
+        out = cp.jitter(base, n, width, height, pattern=params.get("pattern", "halton"))
+    elif path.type == "orbit":
+        # around a point `distance` ahead of the default camera, starting where it stands
+        eye = np.asarray(base.eye, np.float64)
+        fwd = -np.asarray(base.rotation, np.float64)[2]
+        center = np.asarray(params.get("center") or eye + fwd * params.get("distance", 4.0))
+        rel = eye - center
+        radius = float(params.get("radius") or np.hypot(rel[0], rel[2]) or 1.0)
+        out = cp.orbit(center, radius, n, float(params["degrees_per_frame"]), height=rel[1],
+                       start_deg=float(np.rad2deg(np.arctan2(rel[0], rel[2]))),
+                       fov_y_deg=float(np.rad2deg(float(base.fov_y))),
+                       near=float(base.near), far=float(base.far))
     else:
-        raise Unavailable(f"jaxrender.scene.camera_path has no camera path {path.type!r}")
-    return _split_cameras(out, path.frames)
+        raise Unavailable(f"camera path type {path.type!r} is not supported")
+    return _split_cameras(out, n)
 
 
 # ---------------------------------------------------------------- metrics
@@ -171,45 +192,52 @@ def _map(x):
     return None
 
 
+def _display(x):
+    fn = _attr("jaxrender.metrics", "to_display", "scoring images")
+    return fn(x)
+
+
 def frame_metrics(test: np.ndarray, ref: np.ndarray, names) -> tuple[dict, np.ndarray]:
-    """Per-frame metrics of linear RGB (H, W, 3) images and an error map for the figures
-    (FLIP's map when FLIP is computed, else the mean absolute difference)."""
+    """Per-frame metrics of linear RGB (H, W, 3) images, display-referred (``to_display``:
+    clamp, sRGB encode) as the published numbers are, and an error map for the figures
+    (FLIP's map when FLIP is computed, else the mean absolute display difference)."""
     names = [n for n in names if n != "temporal_error"]
     out: dict = {}
     err_map = None
-    if names:
-        m = _module("jaxrender.metrics", "scoring images")
-        fns = {
-            "rmse": ("rmse", lambda f: f(test, ref)),
-            "psnr": ("psnr", lambda f: f(test, ref)),
-            "mssim": ("ssim", lambda f: f(test, ref)),
-            "flip": ("flip", lambda f: f(ref, test)),
-            "delta_e": ("delta_e2000", lambda f: f(test, ref)),
-        }
-        for name in names:
-            attr, call = fns[name]
-            fn = getattr(m, attr, None)
-            if fn is None:
-                raise Unavailable(f"metric {name!r} needs jaxrender.metrics.{attr}, not there yet")
-            res = call(fn)
-            out[name] = _value(res)
-            if name == "flip":
-                err_map = _map(res)
+    m = _module("jaxrender.metrics", "scoring images")
+    t, r = _display(test), _display(ref)
+    fns = {
+        "rmse": ("rmse", lambda f: f(t, r)),
+        "psnr": ("psnr", lambda f: f(t, r)),
+        "mssim": ("ssim", lambda f: f(t, r)),
+        "flip": ("flip", lambda f: f(r, t)),
+        "delta_e": ("delta_e2000", lambda f: f(t, r)),
+    }
+    for name in names:
+        attr, call = fns[name]
+        fn = getattr(m, attr, None)
+        if fn is None:
+            raise Unavailable(f"metric {name!r} needs jaxrender.metrics.{attr}, not there yet")
+        res = call(fn)
+        out[name] = _value(res)
+        if name == "flip":
+            err_map = _map(res)
     if err_map is None or err_map.shape[:2] != test.shape[:2]:
-        err_map = np.abs(test - ref).mean(axis=-1)
-    return out, err_map.reshape(test.shape[:2]).astype(np.float32)
+        err_map = np.abs(np.asarray(t) - np.asarray(r)).mean(axis=-1)
+    return out, np.asarray(err_map).reshape(test.shape[:2]).astype(np.float32)
 
 
 def sequence_metrics(tests: np.ndarray, refs: np.ndarray, names) -> tuple[dict, list]:
     """Metrics of a whole (T, H, W, 3) sequence (the value is repeated on each frame's row)
     and the per-frame temporal error of each frame against its predecessor (NaN at frame 0),
-    whose mean over frames 1.. is the sequence's value."""
+    whose mean over frames 1.. is the sequence's value. Display-referred, as frame_metrics."""
     t = tests.shape[0]
     if "temporal_error" not in names:
         return {}, [float("nan")] * t
     if t < 2:
         return {"temporal_error": float("nan")}, [float("nan")]
     fn = _attr("jaxrender.metrics", "temporal_error", "metric 'temporal_error'")
-    per_frame = [float("nan")] + [_value(fn(tests[i - 1:i + 1], refs[i - 1:i + 1]))
+    ti, ri = _display(tests), _display(refs)
+    per_frame = [float("nan")] + [_value(fn(ti[i - 1:i + 1], ri[i - 1:i + 1]))
                                   for i in range(1, t)]
-    return {"temporal_error": _value(fn(tests, refs))}, per_frame
+    return {"temporal_error": _value(fn(ti, ri))}, per_frame

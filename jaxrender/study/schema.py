@@ -329,7 +329,7 @@ def _scenes(ck: _Checker, raw, root: Path, study_dir: Path) -> tuple[SceneSpec, 
         ck.keys(item, path, _SCENE_KEYS, required=("name",))
         name = ck.str_(item["name"], f"{path}.name")
         label = ck.str_(item.get("label", Path(name).stem), f"{path}.label")
-        params = ck.table(item.get("params", {}), f"{path}.params")
+        params = dict(ck.table(item.get("params", {}), f"{path}.params"))
         for k, v in params.items():
             if isinstance(v, (dict, list)) and not (isinstance(v, list) and v):
                 ck.fail(f"{path}.params.{k}", f"expected a value, got {_type_name(v)}")
@@ -351,6 +351,16 @@ def _scenes(ck: _Checker, raw, root: Path, study_dir: Path) -> tuple[SceneSpec, 
                 ck.fail(f"{path}.name", f"unknown scene {name!r}; built-in scenes: "
                         f"{', '.join(builtins) or '(none)'}; scene files in configs/scenes: "
                         f"{', '.join(files) or '(none)'}")
+        if file is None:
+            sizes = backend.scene_params(name)
+            if sizes is not None:
+                for k, v in list(params.items()):
+                    if k not in sizes:
+                        ck.fail(f"{path}.params.{k}", f"scene {name!r} has no size parameter "
+                                f"{k!r}; its parameters are: {', '.join(sizes) or '(none)'}")
+                    params[k] = check_param(ck, f"{path}.params.{k}", v, sizes[k], True)
+        elif params:
+            ck.fail(f"{path}.params", "size parameters apply to built-in scenes only")
         if any(s.label == label for s in out):
             ck.fail(f"{path}.label", f"scene label {label!r} is used twice; set `label`")
         frozen = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)
@@ -396,10 +406,27 @@ def _paths(ck: _Checker, raw, root: Path, default_frames: int) -> tuple[PathSpec
                     f"{', '.join(known)}")
         name = ck.str_(merged.get("name", ptype), f"{path}.name")
         frames = ck.int_(merged.get("frames", default_frames), f"{path}.frames", lo=1)
-        params = ck.table(merged["params"], f"{path}.params")
+        params = dict(ck.table(merged["params"], f"{path}.params"))
         for k, v in params.items():
             if isinstance(v, dict):
                 ck.fail(f"{path}.params.{k}", "expected a value, got a table")
+        spec = backend.PATH_PARAMS.get(ptype)
+        if spec is not None:
+            for k, v in params.items():
+                if k not in spec:
+                    ck.fail(f"{path}.params.{k}", f"camera path {ptype!r} has no parameter "
+                            f"{k!r}; its parameters are: {', '.join(spec) or '(none)'}")
+                default, kind = spec[k]
+                if kind is float:
+                    params[k] = ck.num(v, f"{path}.params.{k}")
+                elif kind is str:
+                    params[k] = ck.str_(v, f"{path}.params.{k}")
+                elif kind is list and not (isinstance(v, list) and len(v) == 3 and all(
+                        isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
+                    ck.fail(f"{path}.params.{k}", "expected a list of 3 numbers")
+            for k, (default, _) in spec.items():
+                if default is None and k not in params:
+                    ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
         if any(p.name == name for p in out):
             ck.fail(f"{path}.name", f"camera path name {name!r} is used twice")
         frozen = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)

@@ -1,0 +1,182 @@
+"""Study files: valid ones resolve as documented; each malformed one gives its own error,
+naming the file and the key path."""
+
+import textwrap
+
+import pytest
+
+from jaxrender.study.errors import StudyError, UserError
+from jaxrender.study.schema import load_study, parse_resolution, to_toml
+
+BASE = """
+name = "t"
+resolution = "24x16"
+scenes = ["tiny"]
+[[pipelines]]
+type = "flat"
+"""
+
+
+def _write(root, text, name="s.toml"):
+    p = root / "studies" / name
+    p.parent.mkdir(exist_ok=True)
+    p.write_text(textwrap.dedent(text))
+    return p
+
+
+def test_minimal_defaults(fake):
+    s = load_study(_write(fake, BASE))
+    assert s.resolution == (24, 16)
+    assert [p.type for p in s.paths] == ["static"] and s.paths[0].frames == 1
+    assert [v.params for v in s.variants] == [()]
+    assert s.reference.pipeline == "reference"
+    assert "psnr" in s.metrics and "summary_table" in s.figures
+
+
+def test_sweeps_cartesian_and_zip(fake):
+    s = load_study(_write(fake, BASE + """
+        sweep = { levels = [2, 4, 8], noise = [0.0, 0.1] }
+        [[pipelines]]
+        type = "flat"
+        label = "zipped"
+        params = { dither = true }
+        sweep = { levels = [2, 4], noise = [0.0, 0.1] }
+        sweep_mode = "zip"
+        """))
+    cart = [dict(v.params) for v in s.variants if v.label == "flat"]
+    assert len(cart) == 6 and {"levels": 8, "noise": 0.1} in cart
+    assert all(isinstance(v["noise"], float) for v in cart)  # ints widened for float fields
+    zipped = [dict(v.params) for v in s.variants if v.label == "zipped"]
+    assert zipped == [{"dither": True, "levels": 2, "noise": 0.0},
+                      {"dither": True, "levels": 4, "noise": 0.1}]
+
+
+def test_presets_compose(fake):
+    s = load_study(_write(fake, """
+        scenes = [{ name = "tiny2", params = { n = 3 } }, "tiny"]
+        frames = 5
+        paths = ["slowpan", { preset = "slowpan", name = "long", frames = 7 }]
+        [[pipelines]]
+        preset = "coarse"
+        params = { noise = 0.5 }
+        """))
+    assert [(p.name, p.type, p.frames) for p in s.paths] == [("slowpan", "fakepan", 3),
+                                                             ("long", "fakepan", 7)]
+    assert dict(s.paths[0].params) == {"step": 0.02}
+    assert s.variants[0].label == "coarse"
+    assert dict(s.variants[0].params) == {"levels": 2, "noise": 0.5}
+    assert s.scenes[0].params == (("n", 3),)
+
+
+def test_overrides_and_round_trip(fake, tmp_path):
+    s = load_study(_write(fake, BASE + 'sweep = { levels = [2, 4] }\n'
+                          '[[paths]]\npreset = "slowpan"\n'))
+    s2 = s.with_overrides(frames=2, resolution="8x6")
+    assert s2.resolution == (8, 6) and s2.paths[0].frames == 2
+    back = tmp_path / "resolved.toml"
+    back.write_text(to_toml(s2))
+    s3 = load_study(back)
+    assert (s3.resolution, s3.paths, s3.variants, s3.reference, s3.metrics) == (
+        s2.resolution, s2.paths, s2.variants, s2.reference, s2.metrics)
+
+
+@pytest.mark.parametrize("text", ["64x48", [64, 48], "64X48"])
+def test_resolution_forms(text):
+    assert parse_resolution(text) == (64, 48)
+
+
+# (what is wrong, the study text, the key path, words the message must contain)
+MALFORMED = [
+    ("invalid TOML", "name = \n", "", "invalid TOML"),
+    ("unknown top key", BASE + "\n", None, None),  # placeholder replaced below
+    ("unknown top-level key", "colour = 1\n" + BASE, "colour", "unknown key"),
+    ("scenes missing", 'name = "t"\n[[pipelines]]\ntype = "flat"\n', "(top level)",
+     "missing required key 'scenes'"),
+    ("resolution zero", BASE.replace('"24x16"', '"0x16"'), "resolution", "got 0x16"),
+    ("resolution garbage", BASE.replace('"24x16"', '"big"'), "resolution", "'big'"),
+    ("resolution too large", BASE.replace('"24x16"', "[100000, 10]"), "resolution", "1..8192"),
+    ("frames not int", 'frames = "three"\n' + BASE, "frames", "expected an integer"),
+    ("frames zero", "frames = 0\n" + BASE, "frames", ">= 1"),
+    ("unknown metric", 'metrics = ["psnr", "vmaf"]\n' + BASE, "metrics[1]", "'vmaf'"),
+    ("unknown figure", 'figures = ["nope"]\n' + BASE, "figures[0]", "unknown name"),
+    ("empty scenes", BASE.replace('["tiny"]', "[]"), "scenes", "non-empty list"),
+    ("unknown scene", BASE.replace('["tiny"]', '["castle"]'), "scenes[0].name",
+     "unknown scene 'castle'"),
+    ("missing scene file", BASE.replace('["tiny"]', '["configs/scenes/nope.toml"]'),
+     "scenes[0].name", "not found"),
+    ("scene is a number", BASE.replace('["tiny"]', "[3]"), "scenes[0]", "expected a table"),
+    ("duplicate scene", BASE.replace('["tiny"]', '["tiny", "tiny"]'), "scenes[1].label",
+     "used twice"),
+    ("unknown pipeline", BASE.replace('"flat"', '"dacs_xl"'), "pipelines[0].type",
+     "'dacs_xl' is not registered; registered:"),
+    ("pipelines missing type", BASE.replace('type = "flat"', 'label = "x"'), "pipelines[0]",
+     "missing required key 'type'"),
+    ("unknown pipeline key", BASE + "colour = 3\n", "pipelines[0].colour", "unknown key"),
+    ("unknown param", BASE + "params = { treshold = 0.1 }\n", "pipelines[0].params.treshold",
+     "has no parameter 'treshold'"),
+    ("wrong param type", BASE + 'params = { noise = "lots" }\n', "pipelines[0].params.noise",
+     "expected a finite number"),
+    ("bool for int", BASE + "params = { levels = true }\n", "pipelines[0].params.levels",
+     "expected an integer"),
+    ("width in params", BASE + "params = { width = 10 }\n", "pipelines[0].params.width",
+     "resolution is set for the whole study"),
+    ("rejected by the config", BASE + "params = { levels = 0 }\n", "pipelines[0].params",
+     "levels must be >= 1"),
+    ("empty sweep", BASE + "sweep = { levels = [] }\n", "pipelines[0].sweep.levels",
+     "non-empty list"),
+    ("sweep not a list", BASE + "sweep = { levels = 4 }\n", "pipelines[0].sweep.levels",
+     "non-empty list"),
+    ("sweep wrong element type", BASE + 'sweep = { noise = [0.1, "x"] }\n',
+     "pipelines[0].sweep.noise", "expected a finite number"),
+    ("zip unequal", BASE + 'sweep = { levels = [1, 2], noise = [0.1] }\nsweep_mode = "zip"\n',
+     "pipelines[0].sweep", "equal length"),
+    ("bad sweep mode", BASE + 'sweep_mode = "diagonal"\n', "pipelines[0].sweep_mode",
+     "'cartesian' or 'zip'"),
+    ("param fixed and swept", BASE + "params = { levels = 2 }\nsweep = { levels = [4] }\n",
+     "pipelines[0].sweep.levels", "both a fixed parameter and swept"),
+    ("duplicate label", BASE + '[[pipelines]]\ntype = "flat"\n', "pipelines[1].label",
+     "used twice"),
+    ("unknown pipeline preset", BASE + 'preset = "turbo"\n', "pipelines[0].preset",
+     "no pipeline preset 'turbo'"),
+    ("unknown path preset", BASE + '[[paths]]\npreset = "zoom"\n', "paths[0].preset",
+     "no camera path preset 'zoom'"),
+    ("unknown path type", BASE + '[[paths]]\ntype = "spiral"\n', "paths[0].type",
+     "unknown camera path type 'spiral'"),
+    ("path frames negative", BASE + '[[paths]]\ntype = "static"\nframes = -2\n',
+     "paths[0].frames", ">= 1"),
+    ("unknown reference key", BASE + "[reference]\nk = 8\n", "reference.k", "unknown key"),
+    ("reference param type", BASE + '[reference]\nparams = { samples = 2.5 }\n',
+     "reference.params.samples", "expected an integer"),
+    ("timing repeats zero", BASE + "[timing]\nrepeats = 0\n", "timing.repeats", ">= 1"),
+    ("save_frames negative", "save_frames = [-1]\n" + BASE, "save_frames[0]", ">= 0"),
+]
+MALFORMED = [m for m in MALFORMED if m[2] is not None]
+
+
+@pytest.mark.parametrize("what,text,key,words", MALFORMED, ids=[m[0] for m in MALFORMED])
+def test_malformed(fake, what, text, key, words):
+    p = _write(fake, text)
+    with pytest.raises(StudyError) as e:
+        load_study(p)
+    msg = str(e.value)
+    assert msg.startswith(f"{p}: "), msg
+    assert e.value.path == key, msg
+    assert words in msg, msg
+    assert "\n" not in msg
+
+
+def test_malformed_preset_names_the_preset_file(fake):
+    (fake / "configs" / "pipelines" / "broken.toml").write_text('type = "flat"\nspeed = 1\n')
+    with pytest.raises(StudyError, match=r"configs/pipelines/broken.toml: speed: unknown key"):
+        load_study(_write(fake, BASE + 'preset = "broken"\n'))
+
+
+def test_missing_file(fake):
+    with pytest.raises(StudyError, match="nope.toml: no such file"):
+        load_study(fake / "nope.toml")
+
+
+def test_bad_override(fake):
+    s = load_study(_write(fake, BASE))
+    with pytest.raises(UserError, match="--resolution"):
+        s.with_overrides(resolution="10")
