@@ -99,12 +99,25 @@ def broadcast_taps(taps: Array, ndim: int, axis: int) -> Array:
     return taps.reshape((n,) + tuple(shape))
 
 
-def correlate_valid(x: Array, taps: Array, axis: int) -> Array:
-    """1-D correlation along ``axis`` over the valid region: out[i] = sum_k taps[k] x[i + k].
+# How the separable filters run: "slices" (sum of shifted slices, each pass materialised) is
+# the default; "conv" (one depthwise XLA convolution per pass) compiles faster but XLA:CPU runs
+# it ~10x slower. Read at trace time; benchmarks/bench_metrics.py --impl compares the two.
+CORRELATE_IMPL = "slices"
 
-    Written as a sum of shifted slices (not a convolution primitive) so it is elementwise in
-    the working precision on every backend (no TF32) and fuses into one loop. ``taps`` is
-    (n,) or (n, C) for per-channel taps along the last axis of ``x``."""
+
+def correlate_valid(x: Array, taps: Array, axis: int) -> Array:
+    """1-D correlation along ``axis`` (-3 = H or -2 = W of a (..., H, W, C) array) over the
+    valid region: out[i] = sum_k taps[k] x[i + k]. ``taps`` is (n,) (same for every channel) or
+    (n, C) (one filter per channel). Elementwise in the working precision on every backend
+    (never TF32)."""
+    if axis % x.ndim not in (x.ndim - 3, x.ndim - 2):
+        raise ValueError(f"correlate_valid: axis must be H (-3) or W (-2), got {axis}")
+    if CORRELATE_IMPL == "conv":
+        return _correlate_conv(x, taps, axis)
+    return _correlate_slices(x, taps, axis)
+
+
+def _correlate_slices(x: Array, taps: Array, axis: int) -> Array:
     n = taps.shape[0]
     axis = axis % x.ndim
     length = x.shape[axis] - n + 1
@@ -112,7 +125,24 @@ def correlate_valid(x: Array, taps: Array, axis: int) -> Array:
     acc = t[0] * jax.lax.slice_in_dim(x, 0, length, axis=axis)
     for k in range(1, n):
         acc = acc + t[k] * jax.lax.slice_in_dim(x, k, k + length, axis=axis)
-    return acc
+    # Materialise each pass: otherwise XLA fuses the first pass into every tap of the second
+    # (n^2 work per pixel, and slow compiles).
+    return jax.lax.optimization_barrier(acc)
+
+
+def _correlate_conv(x: Array, taps: Array, axis: int) -> Array:
+    n, c = taps.shape[0], x.shape[-1]
+    taps = taps.astype(x.dtype)
+    if taps.ndim == 1:
+        taps = jnp.broadcast_to(taps[:, None], (n, c))
+    lead = x.shape[:-3]
+    along_h = axis % x.ndim == x.ndim - 3
+    kernel = taps.reshape((n, 1, 1, c) if along_h else (1, n, 1, c))  # HWIO, depthwise
+    out = jax.lax.conv_general_dilated(
+        x.reshape((-1,) + x.shape[-3:]), kernel, window_strides=(1, 1), padding="VALID",
+        dimension_numbers=("NHWC", "HWIO", "NHWC"), feature_group_count=c,
+        precision=jax.lax.Precision.HIGHEST)
+    return out.reshape(lead + out.shape[1:])
 
 
 def pad_axis(x: Array, radius: int, axis: int, mode: str) -> Array:

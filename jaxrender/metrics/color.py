@@ -32,19 +32,37 @@ def _srgb_decode(v: Array) -> Array:
     return jnp.where(v <= SRGB_DECODE_CUTOFF, v / 12.92, jnp.power((safe + 0.055) / 1.055, 2.4))
 
 
+LAB_EPSILON = (24.0 / 116.0) ** 3  # CIE 1976: cube root above, linear segment below
+
+
 def _lab_f(t: Array) -> Array:
-    # CIE 1976: cube root above (24/116)^3, else the linear segment (841/108) t + 16/116.
-    return jnp.where(t > (24.0 / 116.0) ** 3, jnp.cbrt(t), (841.0 / 108.0) * t + 16.0 / 116.0)
+    return jnp.where(t > LAB_EPSILON, jnp.cbrt(t), (841.0 / 108.0) * t + 16.0 / 116.0)
+
+
+def _lab_f_diff(u: Array, v: Array, u_minus_v: Array) -> Array:
+    """f(u) - f(v) without cancellation: near-neutral colours have f(u) ~ f(v), and a and b are
+    500x and 200x that small difference. On the cube-root branch it is
+    (u - v) / (cu^2 + cu cv + cv^2) with ``u_minus_v`` formed directly from linear RGB."""
+    cu, cv = jnp.cbrt(u), jnp.cbrt(v)
+    both_cbrt = (u > LAB_EPSILON) & (v > LAB_EPSILON)
+    return jnp.where(both_cbrt, u_minus_v / (cu * cu + cu * cv + cv * cv), _lab_f(u) - _lab_f(v))
 
 
 def srgb_to_lab(rgb: Array) -> Array:
     """CIELab (D65) of sRGB-encoded (..., 3) values, as ``colour.XYZ_to_Lab(colour.sRGB_to_XYZ(.))``."""
     lin = _srgb_decode(rgb)
     c = [lin[..., i] for i in range(3)]
-    xyz = [SRGB_TO_XYZ[r, 0] * c[0] + SRGB_TO_XYZ[r, 1] * c[1] + SRGB_TO_XYZ[r, 2] * c[2]
-           for r in range(3)]
-    fx, fy, fz = (_lab_f(xyz[i] / WHITE_XYZ[i]) for i in range(3))
-    return jnp.stack([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)], axis=-1)
+
+    def combo(m):  # elementwise m . rgb (no TF32 matmul)
+        return m[0] * c[0] + m[1] * c[1] + m[2] * c[2]
+
+    # X/Xn, Y/Yn, Z/Zn and their differences, each from its own float64 coefficients.
+    rows = SRGB_TO_XYZ / WHITE_XYZ[:, None]
+    x, y, z = combo(rows[0]), combo(rows[1]), combo(rows[2])
+    fy = _lab_f(y)
+    return jnp.stack([116.0 * fy - 16.0,
+                      500.0 * _lab_f_diff(x, y, combo(rows[0] - rows[1])),
+                      200.0 * _lab_f_diff(y, z, combo(rows[1] - rows[2]))], axis=-1)
 
 
 def _hue_deg(b: Array, a: Array) -> Array:

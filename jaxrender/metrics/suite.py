@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from jaxrender.metrics._common import as_float, precision, resolve_dtype
 from jaxrender.metrics.color import delta_e2000
 from jaxrender.metrics.display import to_display
 from jaxrender.metrics.error import mse, psnr, rmse
@@ -23,8 +24,11 @@ def image_metrics(test, reference, *, names=IMAGE_METRICS, linear: bool = True,
         raise ValueError(f"image_metrics: unknown metrics {sorted(unknown)}; "
                          f"known: {IMAGE_METRICS}")
     if linear:
-        test = to_display(test, "ldr", exposure)
-        reference = to_display(reference, "ldr", exposure)
+        with precision(dtype):
+            dt = resolve_dtype(dtype)
+            test = to_display(as_float(test, dt, "image_metrics", "test"), "ldr", exposure)
+            reference = to_display(as_float(reference, dt, "image_metrics", "reference"),
+                                   "ldr", exposure)
     fns = {
         "mse": lambda: mse(test, reference, dtype=dtype),
         "rmse": lambda: rmse(test, reference, dtype=dtype),
