@@ -21,10 +21,10 @@ EMPTY_KEY = (1 << 63) - 1  # no fragment: larger than every packed key
 class WorkChunk:
     """One chunk of work items; arrays of shape [capacity]."""
 
-    slot: Array  # int64 triangle slot in the setup arrays
+    slot: Array  # int32 triangle slot in the setup arrays
     tri: Array  # int32 original triangle id
-    px: Array  # int64 pixel column
-    py: Array  # int64 pixel row
+    px: Array  # int32 pixel column
+    py: Array  # int32 pixel row
     covered: Array  # bool: live item whose sample point is inside the triangle
     depth: Array  # float32 window depth at the sample point (clamped to [0, 1])
 
@@ -37,24 +37,27 @@ def _chunk(setup: TriSetup, incl: Array, base: Array, capacity: int, offset: Arr
     n_slots = setup.count.shape[0]
     starts = incl - setup.count
     # Which triangle owns each item: mark each triangle's first item, then a running maximum.
+    # (An associative scan: XLA's cumulative-max lowering is several times slower on CPU.)
     local = starts - base
     in_chunk = (setup.count > 0) & (local >= 0) & (local < capacity)
-    mark = jnp.full((capacity,), -1, jnp.int64)
+    mark = jnp.full((capacity,), -1, jnp.int32)
     mark = mark.at[jnp.where(in_chunk, local, capacity)].max(
-        jnp.arange(n_slots, dtype=jnp.int64), mode="drop"
+        jnp.arange(n_slots, dtype=jnp.int32), mode="drop"
     )
-    first = jnp.searchsorted(incl, base, side="right").astype(jnp.int64)
+    first = jnp.searchsorted(incl, base, side="right").astype(jnp.int32)
     mark = mark.at[0].max(first)
-    slot = jnp.minimum(jax.lax.cummax(mark), n_slots - 1)
+    slot = jnp.minimum(jax.lax.associative_scan(jnp.maximum, mark), n_slots - 1)
 
-    item = base + jnp.arange(capacity, dtype=jnp.int64)
-    live = item < incl[-1]
-    j = item - starts[slot]
+    # Item index inside its triangle's bounding box; fits int32 (a box has < 2^31 pixels).
+    local32 = jnp.clip(local, -(2**31) + 1, 2**31 - 1).astype(jnp.int32)
+    j = jnp.arange(capacity, dtype=jnp.int32) - local32[slot]
+    live = base + jnp.arange(capacity, dtype=jnp.int64) < incl[-1]
     bw = setup.bw[slot]
-    px = setup.x0[slot] + j % bw
-    py = setup.y0[slot] + j // bw
-    sx = px * SUBPIXEL + offset[0]
-    sy = py * SUBPIXEL + offset[1]
+    row = jnp.floor((j.astype(jnp.float64) + 0.5) / bw.astype(jnp.float64)).astype(jnp.int32)
+    px = setup.x0[slot] + (j - row * bw)
+    py = setup.y0[slot] + row
+    sx = (px * SUBPIXEL).astype(jnp.float64) + offset[0].astype(jnp.float64)
+    sy = (py * SUBPIXEL).astype(jnp.float64) + offset[1].astype(jnp.float64)
     e = setup.edge_a[slot] * sx[:, None] + setup.edge_b[slot] * sy[:, None] + setup.edge_c[slot]
     covered = live & jnp.all(e + setup.top_left[slot] > 0, axis=1)
     lam = e.astype(jnp.float32) * setup.inv_area[slot][:, None]

@@ -133,8 +133,8 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
                 fan_ids = jnp.repeat(idx.astype(jnp.int32), MAX_FAN)
                 s = setup_triangles(fan, fan_ok, fan_ids, width, height, offset, cull)
             with jax.named_scope("coverage"):
-                zb, fr = accumulate(zb, s, width, capacity, offset)
-            return zb, fr, it + jnp.sum(s.count)
+                zb, fr_chunk = accumulate(zb, s, width, capacity, offset)
+            return zb, fr + fr_chunk, it + jnp.sum(s.count)
 
         n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
         zbuf, frags, items = jax.lax.fori_loop(

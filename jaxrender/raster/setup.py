@@ -2,9 +2,11 @@
 
 Window coordinates are snapped to 1/256 pixel (8 sub-pixel bits) with float32 operations that
 are each correctly rounded (divide, add, multiply by an exact constant, round half to even), so
-every device and the NumPy reference snap identically. From there on everything is integer:
-edge functions ``E(P) = A Px + B Py + C`` in int64. The guard band (see ``guard_band``) keeps
-|X|, |Y| below 2^28, so every product and sum stays far inside int64.
+every device and the NumPy reference snap identically. From there on every value is an
+integer: edge functions ``E(P) = A Px + B Py + C`` are held in float64, which is exact here:
+the guard band (see ``guard_band``) keeps |X|, |Y| below 2^24, so every product is below 2^50
+and every sum below 2^52, integers that float64 represents exactly (and float64 arithmetic is
+vectorised on CPUs, where int64 multiplication is not).
 
 Conventions: pixel (px, py) has its centre at (px + 0.5, py + 0.5); y grows down the image
 (row 0 is the top); a point exactly on an edge is covered only if that edge is a top edge
@@ -21,7 +23,7 @@ from jaxrender.types import Array, pytree_dataclass
 
 SUBPIXEL_BITS = 8
 SUBPIXEL = 1 << SUBPIXEL_BITS
-_COORD_BITS = 27  # |X|, |Y| < 2^27 after the guard band, so |E| < 2^57
+_COORD_BITS = 24  # |X|, |Y| < 2^24 after the guard band, so |E| < 2^52: exact in float64
 
 
 def guard_band(width: int, height: int) -> float:
@@ -33,30 +35,29 @@ def guard_band(width: int, height: int) -> float:
 class TriSetup:
     """Per-triangle data the coverage loop gathers. Arrays have a leading triangle-slot axis."""
 
-    edge_a: Array  # int64[N, 3]  E_i(P) = A_i Px + B_i Py + C_i, edge i opposite vertex i,
-    edge_b: Array  # int64[N, 3]  oriented so that the interior is positive
-    edge_c: Array  # int64[N, 3]
-    top_left: Array  # int64[N, 3] 1 where the edge is top or left (E == 0 counts as covered)
+    edge_a: Array  # float64[N, 3] E_i(P) = A_i Px + B_i Py + C_i, edge i opposite vertex i,
+    edge_b: Array  # float64[N, 3] oriented so that the interior is positive (integer values)
+    edge_c: Array  # float64[N, 3]
+    top_left: Array  # float64[N, 3] 1 where the edge is top or left (E == 0 counts as covered)
     z: Array  # float32[N, 3] window depth of the vertices
     inv_area: Array  # float32[N] 1 / (2 * area) in fixed-point units
-    x0: Array  # int64[N] first pixel column of the bounding box (for this sample offset)
-    y0: Array  # int64[N]
-    bw: Array  # int64[N] bounding box width in pixels (>= 1 where count > 0)
+    x0: Array  # int32[N] first pixel column of the bounding box (for this sample offset)
+    y0: Array  # int32[N]
+    bw: Array  # int32[N] bounding box width in pixels (>= 1)
     count: Array  # int64[N] pixels in the bounding box; 0 for a slot that produces nothing
     tri: Array  # int32[N] id of the original triangle (a clipped fan keeps its parent's id)
 
 
 def snap(tri_clip: Array, width: int, height: int) -> tuple[Array, Array, Array]:
-    """float32[N, 3, 4] clip -> fixed-point X, Y (int64[N, 3]) and window depth float32[N, 3]."""
+    """float32[N, 3, 4] clip -> fixed-point X, Y (integer-valued float64[N, 3]) and window
+    depth float32[N, 3]."""
     w = tri_clip[..., 3]
     xs = jnp.round((tri_clip[..., 0] / w + 1.0) * jnp.float32(width * SUBPIXEL // 2))
     ys = jnp.round((1.0 - tri_clip[..., 1] / w) * jnp.float32(height * SUBPIXEL // 2))
     z = (tri_clip[..., 2] / w) * 0.5 + 0.5
-    return xs.astype(jnp.int64), ys.astype(jnp.int64), z
+    return xs.astype(jnp.float64), ys.astype(jnp.float64), z
 
 
-def _ceil_div(a: Array, b: int) -> Array:
-    return -jnp.floor_divide(-a, b)
 
 
 def setup_triangles(
@@ -77,26 +78,28 @@ def setup_triangles(
     area2 = (sx[:, 1] - sx[:, 0]) * (sy[:, 2] - sy[:, 0]) - (sy[:, 1] - sy[:, 0]) * (
         sx[:, 2] - sx[:, 0]
     )
-    sign = jnp.where(area2 < 0, -1, 1).astype(jnp.int64)
+    sign = jnp.where(area2 < 0, -1.0, 1.0)
     a_idx, b_idx = jnp.array([1, 2, 0]), jnp.array([2, 0, 1])
     xa, ya, xb, yb = sx[:, a_idx], sy[:, a_idx], sx[:, b_idx], sy[:, b_idx]
     dx = (xb - xa) * sign[:, None]
     dy = (yb - ya) * sign[:, None]
     edge_a, edge_b = -dy, dx
     edge_c = dy * xa - dx * ya
-    top_left = ((dy < 0) | ((dy == 0) & (dx > 0))).astype(jnp.int64)
+    top_left = ((dy < 0) | ((dy == 0) & (dx > 0))).astype(jnp.float64)
 
-    ox, oy = offset[0], offset[1]
-    x0 = jnp.maximum(_ceil_div(jnp.min(sx, axis=1) - ox, SUBPIXEL), 0)
-    x1 = jnp.minimum(jnp.floor_divide(jnp.max(sx, axis=1) - ox, SUBPIXEL), width - 1)
-    y0 = jnp.maximum(_ceil_div(jnp.min(sy, axis=1) - oy, SUBPIXEL), 0)
-    y1 = jnp.minimum(jnp.floor_divide(jnp.max(sy, axis=1) - oy, SUBPIXEL), height - 1)
-    bw = jnp.maximum(x1 - x0 + 1, 0)
-    bh = jnp.maximum(y1 - y0 + 1, 0)
+    # Pixels whose sample point (p * 256 + offset) can lie inside [min, max]; exact, since
+    # dividing by a power of two is exact in floating point.
+    ox, oy = offset[0].astype(jnp.float64), offset[1].astype(jnp.float64)
+    x0 = jnp.maximum(jnp.ceil((jnp.min(sx, axis=1) - ox) / SUBPIXEL), 0.0)
+    x1 = jnp.minimum(jnp.floor((jnp.max(sx, axis=1) - ox) / SUBPIXEL), width - 1.0)
+    y0 = jnp.maximum(jnp.ceil((jnp.min(sy, axis=1) - oy) / SUBPIXEL), 0.0)
+    y1 = jnp.minimum(jnp.floor((jnp.max(sy, axis=1) - oy) / SUBPIXEL), height - 1.0)
+    bw = jnp.maximum(x1 - x0 + 1, 0.0).astype(jnp.int32)
+    bh = jnp.maximum(y1 - y0 + 1, 0.0).astype(jnp.int32)
     keep = valid & (area2 != 0)
     if cull_backfaces:
         keep = keep & (area2 < 0)
-    count = jnp.where(keep, bw * bh, 0)
+    count = jnp.where(keep, bw.astype(jnp.int64) * bh, 0)
     inv_area = 1.0 / jnp.abs(area2).astype(jnp.float32)
     return TriSetup(
         edge_a=edge_a,
@@ -105,8 +108,8 @@ def setup_triangles(
         top_left=top_left,
         z=z,
         inv_area=jnp.where(keep, inv_area, 0.0),
-        x0=x0,
-        y0=y0,
+        x0=x0.astype(jnp.int32),
+        y0=y0.astype(jnp.int32),
         bw=jnp.maximum(bw, 1),
         count=count,
         tri=tri_ids.astype(jnp.int32),
