@@ -86,16 +86,3 @@ def depth_key(depth: Array, tri: Array) -> Array:
     to the lower triangle index."""
     bits = jax.lax.bitcast_convert_type(depth, jnp.int32).astype(jnp.int64)
     return (bits << 32) | tri.astype(jnp.int64)
-
-
-def accumulate(zbuf: Array, setup: TriSetup, width: int, capacity: int, offset: Array):
-    """Scatter-min every covered item's key into zbuf (int64[H*W]); returns (zbuf, fragments)."""
-    n_pix = zbuf.shape[0]
-
-    def fn(state, c: WorkChunk):
-        zb, frags = state
-        pix = jnp.where(c.covered, c.py * width + c.px, n_pix)
-        zb = zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop")
-        return zb, frags + jnp.sum(c.covered, dtype=jnp.int64)
-
-    return for_each_chunk(setup, capacity, offset, (zbuf, jnp.int64(0)), fn)

@@ -16,7 +16,7 @@ import numpy as np
 
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.raster.clip import MAX_FAN, classify, clip_triangles
-from jaxrender.raster.coverage import EMPTY_KEY, accumulate
+from jaxrender.raster.coverage import EMPTY_KEY, depth_key, for_each_chunk
 from jaxrender.raster.resolve import resolve
 from jaxrender.raster.setup import SUBPIXEL_BITS, guard_band, setup_triangles
 from jaxrender.scene.camera import Camera, world_to_clip
@@ -98,7 +98,13 @@ def _rasterize(clip, faces, *, width, height, cull_backfaces, offsets, work_capa
         )
 
 
-def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap) -> VisBuffer:
+def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state, fn):
+    """Run ``state = fn(state, chunk)`` over every work chunk of every triangle, clipped or not.
+
+    Triangles that need no clipping come first, in submission order; triangles crossing a
+    clip plane follow, clipped in chunks of ``clip_cap``. Needs 64-bit types enabled.
+    Returns (state, counts) with counts of work items, clipped and non-finite triangles.
+    """
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
     safe = jnp.asarray(_SAFE_VERTEX, jnp.float32)
@@ -110,53 +116,68 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
         inside, crossing = inside & finite, crossing & finite
         n_cross = jnp.sum(crossing, dtype=jnp.int64)
         rank = jnp.cumsum(crossing, dtype=jnp.int64) - 1
-    ids = jnp.arange(n_tris, dtype=jnp.int32)
-    main_clip = jnp.where(inside[:, None, None], tri_clip, safe)
+    with jax.named_scope("setup"):
+        main_clip = jnp.where(inside[:, None, None], tri_clip, safe)
+        ids = jnp.arange(n_tris, dtype=jnp.int32)
+        main = setup_triangles(main_clip, inside, ids, width, height, offset, cull)
+    with jax.named_scope("coverage"):
+        state = for_each_chunk(main, capacity, offset, state, fn)
 
-    def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
-        with jax.named_scope("setup"):
-            main = setup_triangles(main_clip, inside, ids, width, height, offset, cull)
+    def clip_chunk(k, carry):
+        st, items = carry
+        with jax.named_scope("clip"):
+            sel = crossing & (rank // clip_cap == k)
+            idx = jnp.nonzero(sel, size=clip_cap, fill_value=0)[0]
+            live = jnp.arange(clip_cap) < n_cross - k * clip_cap
+            fan, fan_ok = clip_triangles(tri_clip[idx], guard)
+            fan_ok = (fan_ok & live[:, None]).reshape(-1)
+            fan = jnp.where(fan_ok[:, None, None], fan.reshape(-1, 3, 4), safe)
+            fan_ids = jnp.repeat(idx.astype(jnp.int32), MAX_FAN)
+            s = setup_triangles(fan, fan_ok, fan_ids, width, height, offset, cull)
         with jax.named_scope("coverage"):
-            zbuf = jnp.full((width * height,), EMPTY_KEY, jnp.int64)
-            zbuf, frags = accumulate(zbuf, main, width, capacity, offset)
-            items = jnp.sum(main.count)
+            st = for_each_chunk(s, capacity, offset, st, fn)
+        return st, items + jnp.sum(s.count)
 
-        def clip_chunk(k, state):
-            zb, fr, it = state
-            with jax.named_scope("clip"):
-                sel = crossing & (rank // clip_cap == k)
-                idx = jnp.nonzero(sel, size=clip_cap, fill_value=0)[0]
-                live = jnp.arange(clip_cap) < n_cross - k * clip_cap
-                fan, fan_ok = clip_triangles(tri_clip[idx], guard)
-                fan_ok = (fan_ok & live[:, None]).reshape(-1)
-                fan = jnp.where(fan_ok[:, None, None], fan.reshape(-1, 3, 4), safe)
-                fan_ids = jnp.repeat(idx.astype(jnp.int32), MAX_FAN)
-                s = setup_triangles(fan, fan_ok, fan_ids, width, height, offset, cull)
-            with jax.named_scope("coverage"):
-                zb, fr_chunk = accumulate(zb, s, width, capacity, offset)
-            return zb, fr + fr_chunk, it + jnp.sum(s.count)
+    n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
+    state, items = jax.lax.fori_loop(
+        jnp.int64(0), n_clip_chunks, clip_chunk, (state, jnp.sum(main.count))
+    )
+    counts = {
+        "work_items": items,
+        "clipped": n_cross,
+        "dropped_nonfinite": jnp.sum(~finite, dtype=jnp.int64),
+    }
+    return state, counts
 
-        n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
-        zbuf, frags, items = jax.lax.fori_loop(
-            jnp.int64(0), n_clip_chunks, clip_chunk, (zbuf, frags, items)
+
+def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap) -> VisBuffer:
+    def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
+        n_pix = width * height
+
+        def scatter_min(st, c):
+            zb, frags = st
+            pix = jnp.where(c.covered, c.py * width + c.px, n_pix)
+            zb = zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop")
+            return zb, frags + jnp.sum(c.covered, dtype=jnp.int64)
+
+        zbuf = jnp.full((n_pix,), EMPTY_KEY, jnp.int64)
+        (zbuf, frags), counts = traverse(
+            clip, faces, width, height, cull, offset, capacity, clip_cap,
+            (zbuf, jnp.int64(0)), scatter_min,
         )
         with jax.named_scope("resolve"):
             off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
             vis = resolve(zbuf, clip, faces, width, height, off_px)
-        return vis, frags, items
+        return vis, dict(counts, fragments=frags)
 
     offs = jnp.asarray(offsets, jnp.int64)
     if len(offsets) == 1:
-        vis, frags, items = one_sample(offs[0])
+        vis, counts = one_sample(offs[0])
     else:
-        vis, frags, items = jax.lax.map(one_sample, offs)
-        frags, items = jnp.sum(frags), jnp.sum(items)
-    counts = {
-        "fragments": frags.astype(jnp.int32),
-        "work_items": items.astype(jnp.int32),
-        "clipped": n_cross.astype(jnp.int32),
-        "dropped_nonfinite": jnp.sum(~finite, dtype=jnp.int32),
-    }
+        vis, counts = jax.lax.map(one_sample, offs)
+        counts = {k: jnp.sum(v) if k in ("fragments", "work_items") else v[0]
+                  for k, v in counts.items()}
+    counts = {k: v.astype(jnp.int32) for k, v in counts.items()}
     return VisBuffer(vis.tri_id, vis.depth, vis.bary, vis.dbary_dx, vis.dbary_dy, counts)
 
 
