@@ -109,7 +109,12 @@ MATERIAL = {"name": STR, "albedo": VEC3, "specular": VEC3, "shininess": NUM, "ro
             "brdf": _choice(BRDF_NAMES), "texture": STR, "normal_map": STR, "alpha": NUM,
             "alpha_tested": BOOL, "alpha_cutoff": NUM, "emissive": VEC3,
             "procedural": _choice(PROCEDURAL_NAMES), "stripe_resolution": NUM}
-MESH = {"file": STR, "primitive": _choice({"plane", "box", "sphere"}), "size": _num_or_vec(3),
+def _size(v):
+    return _num(v) or (isinstance(v, list) and len(v) in (2, 3) and all(_num(x) for x in v))
+
+
+_size.__doc__ = "a number or a list of 2 or 3 numbers"
+MESH = {"file": STR, "primitive": _choice({"plane", "box", "sphere"}), "size": _size,
         "subdivisions": INT, "uv_scale": _vec(2), "material": STR, "translate": VEC3,
         "rotate_deg": VEC3, "scale": _num_or_vec(3), "velocity": VEC3}
 LIGHT = {"type": _choice({"directional", "point", "ambient"}), "direction": VEC3,
