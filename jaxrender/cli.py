@@ -77,7 +77,7 @@ def cmd_figures(a) -> int:
     for n in a.only or ():
         if n not in FIGURES:
             raise UserError(f"--only: unknown figure {n!r}; known: {', '.join(FIGURES)}")
-    render_figures(run, tuple(a.only) if a.only else FIGURES)
+    render_figures(run, tuple(a.only) if a.only else FIGURES, out_dir=a.to)
     return 0
 
 
@@ -201,6 +201,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Redraw the figures from stored results, without rendering.")
     s.add_argument("run_dir", help="a study output directory (holding results.csv)")
     s.add_argument("--only", nargs="+", metavar="NAME", help="draw only these figures")
+    s.add_argument("--to", metavar="DIR", help="write the figures here (default RUN_DIR/figures)")
     s.set_defaults(fn=cmd_figures)
 
     s = sub.add_parser("scenes", help="list the built-in scenes",

@@ -70,7 +70,7 @@ def test_study_figures_and_resume(fake, tmp_path, capsys):
     assert main(["study", str(fake), "--out", str(out), "--no-progress", "--no-figures"]) == 0
     assert "2 of 2 sequences already stored" in capsys.readouterr().out
     assert main(["study", str(fake), "--out", str(out), "--no-progress", "--no-figures",
-                 "--frames", "3", "--resolution", "8x6", "--force"]) == 0
+                 "--frames", "3", "--resolution", "12x12", "--force"]) == 0
     assert (out / "results.csv").read_text().count("\n") == 1 + 2 * 3
 
 

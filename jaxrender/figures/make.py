@@ -34,10 +34,11 @@ def _figures_for(run: data.Run, name: str):
     raise ValueError(f"unknown figure {name!r}; known: {', '.join(FIGURES)}")
 
 
-def render_figures(run_dir, names=FIGURES, *, log=print) -> list[Path]:
-    """Draw the named figures into RUN_DIR/figures; figures without data are skipped."""
+def render_figures(run_dir, names=FIGURES, *, out_dir=None, log=print) -> list[Path]:
+    """Draw the named figures into ``out_dir`` (default RUN_DIR/figures); figures without
+    data in this run are skipped with a note."""
     run = data.load_run(run_dir)
-    out_dir = Path(run_dir) / "figures"
+    out_dir = Path(out_dir) if out_dir else Path(run_dir) / "figures"
     made: list[Path] = []
     for name in names:
         figs = _figures_for(run, name)

@@ -33,6 +33,7 @@ FIGURES = (
     "summary_table",
 )
 MAX_SIDE = 8192
+SSIM_MIN_SIDE = 11  # the 11-tap Gaussian window of Wang et al.
 
 _TOP_KEYS = {
     "name", "description", "resolution", "frames", "metrics", "figures", "save_frames",
@@ -132,6 +133,9 @@ class Study:
             )
         if resolution is not None:
             s = dataclasses.replace(s, resolution=parse_resolution(resolution, "--resolution"))
+            if "mssim" in s.metrics and min(s.resolution) < SSIM_MIN_SIDE:
+                raise UserError(f"--resolution: MSSIM needs at least {SSIM_MIN_SIDE}x"
+                                f"{SSIM_MIN_SIDE} pixels; the study asks for mssim")
         return s
 
 
@@ -566,6 +570,9 @@ def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | N
         raise StudyError(file, "resolution", str(e).split(": ", 1)[1]) from None
     frames = ck.int_(data.get("frames", 1), "frames", lo=1)
     metrics = ck.names(data.get("metrics", list(backend.METRICS)), "metrics", backend.METRICS)
+    if "mssim" in metrics and min(resolution) < SSIM_MIN_SIDE:
+        ck.fail("resolution", f"MSSIM needs images of at least {SSIM_MIN_SIDE}x{SSIM_MIN_SIDE} "
+                f"pixels (its window); drop 'mssim' from metrics or raise the resolution")
     figures = ck.names(data.get("figures", list(FIGURES)), "figures", FIGURES)
     save = ck.list_(data.get("save_frames", [0]), "save_frames", nonempty=False)
     save_frames = tuple(sorted({ck.int_(v, f"save_frames[{i}]", lo=0)

@@ -172,3 +172,24 @@ def test_kill_9_leaves_no_half_row(tiny_study, tmp_path):
     assert res.skipped == len(done) and res.computed == 6 - len(done)
     assert len(res.rows) == 18
     assert len(store.read_rows(out / "results.jsonl")) == 18
+
+
+def test_real_metrics(fake, tiny_study, tmp_path, monkeypatch):
+    """The runner with jaxrender.metrics itself (display-referred) on the fake pipelines."""
+    import importlib
+
+    import jaxrender.metrics as m
+
+    homes = {"rmse": "error", "psnr": "error", "ssim": "ssim", "flip": "flip",
+             "delta_e2000": "color", "temporal_error": "temporal"}
+    for name, mod in homes.items():  # undo the fakes the fixture installed
+        real = getattr(importlib.import_module(f"jaxrender.metrics.{mod}"), name)
+        monkeypatch.setattr(m, name, real)
+    study = load_study(tiny_study).with_overrides(frames=2)
+    res = run_study(study, tmp_path / "real", progress=False, figures=False, log=lambda s: None)
+    for r in res.rows:
+        assert 0 < r["psnr"] < 80 and 0 < r["mssim"] <= 1 and 0 <= r["flip"] <= 1
+        assert r["delta_e"] >= 0 and r["temporal_error"] >= 0
+    coarse = [r["psnr"] for r in res.rows if r["pipeline"] == "coarse"]
+    fine = [r["psnr"] for r in res.rows if r["params"] == {"levels": 16}]
+    assert max(coarse) < min(fine)  # fewer quantisation levels, lower PSNR

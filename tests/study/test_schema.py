@@ -71,8 +71,8 @@ def test_presets_compose(fake):
 def test_overrides_and_round_trip(fake, tmp_path):
     s = load_study(_write(fake, BASE + 'sweep = { levels = [2, 4] }\n'
                           '[[paths]]\npreset = "slowpan"\n'))
-    s2 = s.with_overrides(frames=2, resolution="8x6")
-    assert s2.resolution == (8, 6) and s2.paths[0].frames == 2
+    s2 = s.with_overrides(frames=2, resolution="12x11")
+    assert s2.resolution == (12, 11) and s2.paths[0].frames == 2
     back = tmp_path / "resolved.toml"
     back.write_text(to_toml(s2))
     s3 = load_study(back)
@@ -148,6 +148,8 @@ MALFORMED = [
     ("reference param type", BASE + '[reference]\nparams = { samples = 2.5 }\n',
      "reference.params.samples", "expected an integer"),
     ("timing repeats zero", BASE + "[timing]\nrepeats = 0\n", "timing.repeats", ">= 1"),
+    ("too small for MSSIM", BASE.replace('"24x16"', '"24x8"'), "resolution",
+     "MSSIM needs images of at least 11x11"),
     ("save_frames negative", "save_frames = [-1]\n" + BASE, "save_frames[0]", ">= 0"),
 ]
 MALFORMED = [m for m in MALFORMED if m[2] is not None]
@@ -180,3 +182,5 @@ def test_bad_override(fake):
     s = load_study(_write(fake, BASE))
     with pytest.raises(UserError, match="--resolution"):
         s.with_overrides(resolution="10")
+    with pytest.raises(UserError, match="MSSIM needs"):
+        s.with_overrides(resolution="10x10")
