@@ -67,7 +67,8 @@ def rasterize_reference(clip, faces, width, height, *, cull_backfaces=False, off
                 [poly[0], poly[k], poly[k + 1]], t, width, height, (ox, oy), cull_backfaces,
                 tri_id, depth, second, hits,
             )
-    gap = np.where(np.isfinite(second), second - depth, np.inf)
+    with np.errstate(invalid="ignore"):  # inf - inf where a pixel has fewer than two fragments
+        gap = np.where(np.isfinite(second), second - depth, np.inf)
     depth = np.where(tri_id >= 0, np.clip(depth, 0.0, 1.0), 1.0)
     return dict(
         tri_id=tri_id, depth=depth, depth_gap=gap, fragments=int(hits.sum()), coverage_count=hits

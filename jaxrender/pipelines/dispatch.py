@@ -1,0 +1,78 @@
+"""Work lists and chunked dispatch: the one place where shading work is launched.
+
+DESIGN principle 2: a pipeline that shades fewer points must run fewer shader evaluations.
+The points to shade are compacted into a work list (a stable ``nonzero``), and ``shade()`` runs
+over it in chunks of a static size inside a ``lax.while_loop`` whose trip count is the number
+of chunks that hold work, like DispatchIndirect: the compiled program evaluates the shader
+``ceil(n / chunk)`` times, never over the full screen with a mask. Principle 3: the counts
+returned are read off that same work list (``n`` points, ``chunks * chunk`` lanes launched).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+import jax
+import jax.numpy as jnp
+
+from jaxrender.types import Array
+
+DEFAULT_CHUNK = 4096
+
+
+def compact(active: Array) -> tuple[Array, Array]:
+    """Indices of the True entries of bool[N] in order, padded with 0, and their count."""
+    n = jnp.sum(active, dtype=jnp.int32)
+    (idx,) = jnp.nonzero(active, size=active.shape[0], fill_value=0)
+    return idx.astype(jnp.int32), n
+
+
+def dispatch(
+    work: Array, n: Array, fn: Callable[[Array, Array], Array], out: Array, chunk: int
+) -> tuple[Array, dict]:
+    """For the first ``n`` entries of the work list ``work`` (int32[N] item indices), write
+    ``fn(items int32[chunk], live bool[chunk]) -> values[chunk, ...]`` into ``out[items]``.
+
+    Runs ceil(n / chunk) iterations; padding lanes of the last chunk are passed live=False and
+    their results are discarded. Returns (out, counts) with ``invocations`` (= n, the live
+    lanes), ``lanes`` (chunks x chunk launched) and ``chunks``.
+    """
+    chunk = int(min(chunk, max(work.shape[0], 1)))
+    padded = jnp.concatenate([work, jnp.zeros((chunk,), work.dtype)])
+    n_chunks = (n + chunk - 1) // chunk
+    sentinel = out.shape[0]  # out-of-range index: scatter drops the lane
+
+    def body(k, acc):
+        start = k * chunk
+        items = jax.lax.dynamic_slice(padded, (start,), (chunk,))
+        live = start + jnp.arange(chunk, dtype=jnp.int32) < n
+        vals = fn(items, live)
+        return acc.at[jnp.where(live, items, sentinel)].set(vals, mode="drop")
+
+    out = jax.lax.fori_loop(0, n_chunks, body, out)
+    counts = {"invocations": n, "lanes": n_chunks * chunk, "chunks": n_chunks}
+    return out, counts
+
+
+def shade_pixels(
+    active: Array,
+    points_of: Callable[[Array], object],
+    shade_fn: Callable[[object], Array],
+    out: Array,
+    chunk: int = DEFAULT_CHUNK,
+) -> tuple[Array, dict]:
+    """Shade the pixels (or samples) flagged in bool[N] and write their colours into out[N, 3].
+
+    ``points_of(items)`` builds the SurfacePoints of the given flat indices (gathering from the
+    visibility buffer); ``shade_fn(points)`` is the shared shader. Unflagged entries keep their
+    value in ``out``.
+    """
+    work, n = compact(active)
+
+    def fn(items, live):
+        pts = points_of(items)
+        pts = dataclasses.replace(pts, valid=pts.valid & live)
+        return shade_fn(pts)
+
+    return dispatch(work, n, fn, out, chunk)
