@@ -65,7 +65,8 @@ def fig_image_grid(panel: dict) -> Figure:
         axes[0][1].set_title("error map", fontsize=7)
         axes[0][2].set_title("hardest region (zoom)", fontsize=7)
         if im is not None:
-            fig.colorbar(im, ax=[row[1] for row in axes], shrink=0.6, label="error")
+            fig.colorbar(im, ax=[row[1] for row in axes], location="bottom", shrink=0.9,
+                         aspect=30, label="error")
         fig.suptitle(panel["title"])
         _footer(fig, panel.get("device", ""))
     return fig

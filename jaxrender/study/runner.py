@@ -193,8 +193,12 @@ def summarize(rows: list[dict]) -> list[dict]:
     for r in rows:
         key = (r["pipeline"], json.dumps(r.get("params", {}), sort_keys=True))
         groups.setdefault(key, []).append(r)
+    def order(key):  # numbers in numeric order, so levels=2 comes before levels=16
+        return key[0], [(k, (0, v, "") if isinstance(v, (int, float)) else (1, 0, str(v)))
+                        for k, v in sorted(json.loads(key[1]).items())]
+
     out = []
-    for (label, params), rs in sorted(groups.items()):
+    for (label, params), rs in sorted(groups.items(), key=lambda kv: order(kv[0])):
         entry = {"pipeline": label, "params": params, "rows": len(rs)}
         for c in SUMMARY_COLUMNS:
             vals = [r[c] for r in rs if isinstance(r.get(c), (int, float))
