@@ -36,6 +36,7 @@ def planes(guard: float) -> np.ndarray:
 def plane_distances(points: Array, guard: float) -> Array:
     """float32[..., 4] -> float32[..., 6], elementwise (no matrix unit touches geometry)."""
     p = jnp.asarray(planes(guard))
+    p = p.reshape((1,) * (points.ndim - 1) + p.shape)
     return jnp.sum(points[..., None, :] * p, axis=-1)
 
 
@@ -53,10 +54,11 @@ def classify(tri_clip: Array, guard: float) -> tuple[Array, Array]:
 
 def _clip_against(poly: Array, n: Array, plane: Array) -> tuple[Array, Array]:
     """Clip a batch of convex polygons [B, MAX_POLY, 4] with n vertices against one plane."""
-    idx = jnp.arange(MAX_POLY)
+    idx = jnp.arange(MAX_POLY, dtype=jnp.int32)
     nxt = jnp.where(idx[None, :] + 1 < n[:, None], idx[None, :] + 1, 0)  # [B, MAX_POLY]
     a = poly
     b = jnp.take_along_axis(poly, nxt[..., None], axis=1)
+    plane = plane[None, None, :]
     da = jnp.sum(a * plane, axis=-1)
     db = jnp.sum(b * plane, axis=-1)
     live = idx[None, :] < n[:, None]
@@ -85,7 +87,7 @@ def clip_triangles(tri_clip: Array, guard: float) -> tuple[Array, Array]:
     n = jnp.full((bsz,), 3, jnp.int32)
     for plane in planes(guard):
         poly, n = _clip_against(poly, n, jnp.asarray(plane))
-    k = jnp.arange(1, MAX_FAN + 1)
+    k = jnp.arange(1, MAX_FAN + 1, dtype=jnp.int32)
     fan = jnp.stack(
         [
             jnp.broadcast_to(poly[:, :1], (bsz, MAX_FAN, 4)),

@@ -99,7 +99,7 @@ def setup_triangles(
     keep = valid & (area2 != 0)
     if cull_backfaces:
         keep = keep & (area2 < 0)
-    count = jnp.where(keep, bw.astype(jnp.int64) * bh, 0)
+    count = jnp.where(keep, bw.astype(jnp.int64) * bh.astype(jnp.int64), 0)
     inv_area = 1.0 / jnp.abs(area2).astype(jnp.float32)
     return TriSetup(
         edge_a=edge_a,
