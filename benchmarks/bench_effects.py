@@ -55,8 +55,7 @@ def main(argv=None):
         from jaxrender.shading import with_shadow_map
         scene = with_shadow_map(scene)
     cam = scene.camera
-    with jax.numpy_rank_promotion("allow"), jax.numpy_dtype_promotion("standard"):
-        vis = rasterize(scene.positions, scene.faces, cam, args.width, args.height)
+    vis = rasterize(scene.positions, scene.faces, cam, args.width, args.height)
     pts = jax.jit(surface_points)(scene, cam, vis.tri_id.reshape(-1), vis.bary.reshape(-1, 3),
                                   vis.dbary_dx.reshape(-1, 3), vis.dbary_dy.reshape(-1, 3))
     n = int(pts.valid.sum())

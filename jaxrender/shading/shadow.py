@@ -42,9 +42,7 @@ def render_shadow_map(scene: Scene, size: int) -> ShadowMap:
     origin, basis, half = light_frame(scene)
     q = _light_space(scene.positions, origin, basis, half)
     clip = jnp.concatenate([q[:, :2], -q[:, 2:3], jnp.ones_like(q[:, :1])], axis=-1)
-    # The rasterizer is not yet clean under strict rank/dtype promotion (tests turn it on).
-    with jax.numpy_rank_promotion("allow"), jax.numpy_dtype_promotion("standard"):
-        vis = rasterize_clip(clip, scene.faces, size, size)
+    vis = rasterize_clip(clip, scene.faces, size, size)
     return ShadowMap(depth=vis.depth, origin=origin, basis=basis, half_extent=half)
 
 

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -54,9 +53,7 @@ def raster(positions, faces, camera, width=RES, height=RES):
     assert v <= PAD_V and t <= PAD_T, (v, t)
     pos = jnp.concatenate([positions, jnp.zeros((PAD_V - v, 3), jnp.float32)])
     fac = jnp.concatenate([faces, jnp.zeros((PAD_T - t, 3), jnp.int32)])
-    # The rasterizer is not yet clean under strict rank/dtype promotion (conftest turns it on).
-    with jax.numpy_rank_promotion("allow"), jax.numpy_dtype_promotion("standard"):
-        return rasterize(pos, fac, camera, width, height)
+    return rasterize(pos, fac, camera, width, height)
 
 
 def flat(vis):
