@@ -34,14 +34,16 @@ def test_to_display_clamps_then_encodes():
 
 
 def test_image_metrics_applies_display_once(seeded):
-    a, b = seeded.pair((24, 24, 3))
+    a, b = seeded.pair((16, 16, 3))
     lin_a, lin_b = 2.0 * a, 2.0 * b  # linear HDR frames
-    got = metrics.image_metrics(lin_b, lin_a, dtype=np.float64)
+    got = metrics.image_metrics(lin_b, lin_a)
     disp_a, disp_b = metrics.to_display(lin_a), metrics.to_display(lin_b)
-    np.testing.assert_allclose(float(got["rmse"]), float(metrics.rmse(disp_b, disp_a,
-                                                                      dtype=np.float64)))
-    np.testing.assert_allclose(float(got["ssim"]), float(metrics.ssim(disp_b, disp_a,
-                                                                      dtype=np.float64)))
+    np.testing.assert_allclose(float(got["rmse"]), float(metrics.rmse(disp_b, disp_a)),
+                               err_msg=seeded.msg("rmse"))
+    np.testing.assert_allclose(float(got["ssim"]), float(metrics.ssim(disp_b, disp_a)),
+                               err_msg=seeded.msg("ssim"))
+    np.testing.assert_allclose(float(got["flip"]), float(metrics.flip(disp_a, disp_b)[0]),
+                               err_msg=seeded.msg("flip: reference first"))
     assert set(got) == set(metrics.IMAGE_METRICS)
     with pytest.raises(ValueError, match="unknown"):
         metrics.image_metrics(a, b, names=("lpips",))

@@ -58,9 +58,9 @@ def test_hdr_flip_matches_flip_evaluator(seeded):
 
 
 def test_batched_flip_is_per_frame(seeded):
-    ref, test = seeded.pair((2, 24, 28, 3), dtype=np.float32)
+    ref, test = seeded.pair((2, 32, 40, 3), dtype=np.float32)
     means, maps = metrics.flip(ref, test)
-    assert means.shape == (2,) and maps.shape == (2, 24, 28)
+    assert means.shape == (2,) and maps.shape == (2, 32, 40)
     for t in range(2):
         _check(seeded, f"frame {t}", (means[t], maps[t]), _oracle(ref[t], test[t], "LDR"))
 
