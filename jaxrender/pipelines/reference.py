@@ -1,0 +1,244 @@
+"""The ground truth: k x k stratified sub-pixel samples per pixel, each shaded, box-filtered.
+
+Sampling plan: every pixel is split into k x k cells and each cell centre is a visibility
+sample of its own (the rasterizer's exact coverage at that sub-pixel offset); every covered
+sample is a surface point shaded by the shared ``shade()`` at its own position, with texture
+LOD from the sample's footprint (the barycentric derivatives per pixel scaled by 1/k, i.e. per
+sample spacing). Reconstruction: the box filter, the mean of the k^2 sample colours (empty
+samples count as black background).
+
+Memory: the samples are processed one at a time in a ``lax.fori_loop`` that accumulates the
+image, and each sample's covered points are shaded through the compacted, chunked dispatch
+(``pipelines.dispatch``), so the peak is one (H, W) visibility buffer plus one shading chunk,
+whatever k is: 1920x1080 at k = 8 needs a few hundred MiB, not 64 visibility buffers.
+
+Alpha-tested scenes (``effects.alpha_test``): a fragment that fails the alpha test at its
+sample position is discarded before the depth test, so the sample sees what lies behind it.
+
+``convergence_psnr`` renders at k and 2k and returns their LDR PSNR, the estimate a study sets
+beside its best pipeline (DESIGN: the reference should be converged >= 10 dB above it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+
+from jaxrender.pipelines.dispatch import DEFAULT_CHUNK, shade_pixels
+from jaxrender.pipelines.registry import RenderConfig, register
+from jaxrender.raster.coverage import EMPTY_KEY, depth_key
+from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
+from jaxrender.raster.resolve import resolve
+from jaxrender.raster.setup import SUBPIXEL_BITS
+from jaxrender.scene.camera import Camera, world_to_clip
+from jaxrender.scene.scene import Scene
+from jaxrender.shading import alpha_test, shade, surface_points
+from jaxrender.types import Array, Frame
+
+# Chosen from the convergence check (benchmarks/bench_reference.py --convergence; numbers in
+# the module's tests and the issue-4 report): k = 8 gives k-vs-2k LDR PSNR of 38-52 dB on the
+# built-in scenes at 96x64 (spheres and room above 45 dB), k = 16 adds 3-6 dB at 4x the cost.
+DEFAULT_K = 8
+
+
+@dataclass(frozen=True)
+class ReferenceConfig(RenderConfig):
+    """k: samples per pixel side (k x k stratified cell centres); chunk: shading work-list
+    chunk size; convergence: also render at 2k and report ``counts['convergence_psnr']``
+    (LDR PSNR between the k and 2k images; costs 5x the plain render)."""
+
+    k: int = DEFAULT_K
+    chunk: int = DEFAULT_CHUNK
+    convergence: bool = False
+
+    def __post_init__(self):
+        if int(self.k) < 1:
+            raise ValueError(f"reference: k must be >= 1, got {self.k}")
+        if int(self.chunk) < 1:
+            raise ValueError(f"reference: chunk must be >= 1, got {self.chunk}")
+
+
+# ------------------------------------------------------------------ visibility of one sample
+
+
+def _bary_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, w: int, h: int):
+    """Perspective-correct barycentrics and their derivatives per pixel at window points
+    (x, y) float32[N] of triangles int32[N] (the formula of ``raster.resolve``, per point)."""
+    c = clip[faces[tri]]  # [N, 3, 4]
+    c = jnp.stack([c[..., 0], c[..., 1], c[..., 3]], axis=-1)
+    rows = jnp.stack([jnp.cross(c[:, 1], c[:, 2]), jnp.cross(c[:, 2], c[:, 0]),
+                      jnp.cross(c[:, 0], c[:, 1])], axis=-2)
+    scale = jnp.max(jnp.abs(rows), axis=(-2, -1), keepdims=True)
+    rows = rows / jnp.where(scale > 0, scale, 1.0)
+    u = x * (2.0 / w) - 1.0
+    v = 1.0 - y * (2.0 / h)
+    e = rows[..., 0] * u[:, None] + rows[..., 1] * v[:, None] + rows[..., 2]
+    s = jnp.sum(e, axis=-1, keepdims=True)
+    ok = s != 0.0
+    s = jnp.where(ok, s, 1.0)
+    b = e / s
+    db_du = (rows[..., 0] - b * jnp.sum(rows[..., 0], axis=-1, keepdims=True)) / s
+    db_dv = (rows[..., 1] - b * jnp.sum(rows[..., 1], axis=-1, keepdims=True)) / s
+    bc = jnp.clip(b, 0.0, 1.0)
+    bc = bc / jnp.maximum(jnp.sum(bc, axis=-1, keepdims=True), 1e-30)
+    third = jnp.full_like(b, 1.0 / 3.0)
+    zero = jnp.zeros_like(b)
+    return (jnp.where(ok, bc, third), jnp.where(ok, db_du * (2.0 / w), zero),
+            jnp.where(ok, db_dv * (-2.0 / h), zero))
+
+
+def _visibility(scene: Scene, camera: Camera, clip: Array, offset: Array, cfg, inv_k: Array):
+    """VisBuffer (H, W) of one sample at the traced fixed-point offset int64[2]; fragments
+    failing the alpha test are discarded before the depth test. Returns (vis, counts)."""
+    w, h = cfg.width, cfg.height
+    n_pix = w * h
+    faces = scene.faces
+    n_tris = faces.shape[0]
+    off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
+    test_alpha = scene.effects.alpha_test
+
+    def scatter_min(st, c):
+        zb, frags = st
+        covered = c.covered
+        if test_alpha:
+            with jax.enable_x64(False):
+                tri = jnp.where(covered, c.tri, 0).astype(jnp.int32)
+                x = c.px.astype(jnp.float32) + off_px[0]
+                y = c.py.astype(jnp.float32) + off_px[1]
+                b, bx, by = _bary_at(tri, x, y, clip, faces, w, h)
+                pts = surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
+                keep = alpha_test(pts, scene)
+            covered = covered & keep
+        pix = jnp.where(covered, c.py * w + c.px, n_pix)
+        zb = zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop")
+        return zb, frags + jnp.sum(c.covered, dtype=jnp.int64)
+
+    with jax.enable_x64(True):
+        zbuf = jnp.full((n_pix,), EMPTY_KEY, jnp.int64)
+        (zbuf, frags), counts = traverse(
+            clip, faces, w, h, False, offset.astype(jnp.int64),
+            default_work_capacity(n_tris, w, h), default_clip_capacity(n_tris),
+            (zbuf, jnp.int64(0)), scatter_min,
+        )
+        vis = resolve(zbuf, clip, faces, w, h, off_px)
+        counts = {key: v.astype(jnp.int32) for key, v in dict(counts, fragments=frags).items()}
+    return vis, counts
+
+
+# ------------------------------------------------------------------ the render
+
+
+def _offset(s: Array, k: Array) -> Array:
+    """int32[2]: fixed-point offset of stratified sample s (row-major) of k x k, computed in
+    integers: round((i + 0.5) / k * 2^bits) = floor(((2i + 1) 2^bits + k) / 2k), as
+    ``samples.to_fixed(samples.stratified(k))`` gives."""
+    i, j = s % k, s // k
+    one = 1 << SUBPIXEL_BITS
+    return jnp.stack([((2 * i + 1) * one + k) // (2 * k), ((2 * j + 1) * one + k) // (2 * k)])
+
+
+def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Frame:
+    """The reference image at k x k samples per pixel; k is traced (int32[]), so every k
+    shares one compiled program. Only cfg's width, height and chunk are used."""
+    w, h = cfg.width, cfg.height
+    n_pix = w * h
+    with jax.named_scope("transform"):
+        clip = world_to_clip(scene.positions, camera, w / h)
+    inv_k = 1.0 / k.astype(jnp.float32)
+
+    def one_sample(s, carry):
+        acc, any_cov, counts = carry
+        with jax.named_scope("raster"):
+            vis, rc = _visibility(scene, camera, clip, _offset(s, k), cfg, inv_k)
+        tri = vis.tri_id.reshape(-1)
+        bary = vis.bary.reshape(-1, 3)
+        ddx = vis.dbary_dx.reshape(-1, 3) * inv_k  # footprint of one sample, not one pixel
+        ddy = vis.dbary_dy.reshape(-1, 3) * inv_k
+
+        def points_of(items):
+            return surface_points(scene, camera, tri[items], bary[items], ddx[items], ddy[items])
+
+        with jax.named_scope("shade"):
+            rgb, sc = shade_pixels(tri >= 0, points_of, lambda p: shade(p, scene),
+                                   jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
+        new = {"shade_invocations": sc["invocations"], "lanes": sc["lanes"],
+               "chunks": sc["chunks"], "fragments": rc["fragments"],
+               "work_items": rc["work_items"]}
+        counts = {key: counts[key] + new[key] for key in counts}
+        return acc + rgb, any_cov | (tri >= 0), counts
+
+    zero = jnp.int32(0)
+    counts0 = {key: zero for key in
+               ("shade_invocations", "lanes", "chunks", "fragments", "work_items")}
+    init = (jnp.zeros((n_pix, 3), jnp.float32), jnp.zeros((n_pix,), bool), counts0)
+    acc, any_cov, counts = jax.lax.fori_loop(0, k * k, one_sample, init)
+    with jax.named_scope("reconstruct"):
+        image = (acc * (inv_k * inv_k)).reshape(h, w, 3)
+    counts = dict(counts, covered_pixels=jnp.sum(any_cov, dtype=jnp.int32),
+                  samples_per_pixel=k * k,
+                  helper_lanes=counts["lanes"] - counts["shade_invocations"])
+    return Frame(image=image, counts=counts, aux={"coverage": any_cov.reshape(h, w)})
+
+
+def _ldr_psnr(a: Array, b: Array) -> Array:
+    """PSNR in dB of the display-referred (clamped, sRGB-encoded) images, data range 1;
+    over the trailing (H, W, 3) axes. +inf for identical images."""
+    from jaxrender.metrics.display import to_display
+
+    d = to_display(a) - to_display(b)
+    mse = jnp.mean(d * d, axis=(-3, -2, -1))
+    return 10.0 * jnp.log10(1.0 / mse)
+
+
+def _program_cfg(cfg: ReferenceConfig) -> ReferenceConfig:
+    """The static part of cfg the compiled program depends on (k and convergence are not)."""
+    return replace(cfg, k=1, convergence=False)
+
+
+@partial(jax.jit, static_argnums=3)
+def _render_jit(scene, camera, k, cfg):
+    return _render(scene, camera, k, cfg)
+
+
+@partial(jax.jit, static_argnums=3)
+def _render_path_jit(scene, cameras, k, cfg):
+    return jax.lax.map(lambda cam: _render(scene, cam, k, cfg), cameras)
+
+
+def _with_convergence(fn, scene, camera, cfg: ReferenceConfig) -> Frame:
+    base = _program_cfg(cfg)
+    frame = fn(scene, camera, jnp.int32(cfg.k), base)
+    if cfg.convergence:
+        fine = fn(scene, camera, jnp.int32(2 * cfg.k), base)
+        conv = _ldr_psnr(frame.image, fine.image)
+        frame = replace(frame, counts=dict(frame.counts, convergence_psnr=conv))
+    return frame
+
+
+@register("reference", ReferenceConfig,
+          "ground truth: k x k stratified samples per pixel, each shaded, box filter")
+def render(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> Frame:
+    """Ground truth: k x k stratified samples per pixel, each shaded, box filter.
+
+    One compiled program per (scene shapes, width, height, chunk): k is passed to it traced,
+    so changing k or moving the camera never recompiles. With ``cfg.convergence`` the frame
+    is rendered again at 2k and ``counts['convergence_psnr']`` holds their LDR PSNR.
+    """
+    return _with_convergence(_render_jit, scene, camera, cfg)
+
+
+def render_path(scene: Scene, cameras: Camera, cfg: ReferenceConfig) -> Frame:
+    """The reference of every frame of a camera path: ``cameras`` carries a leading frame axis
+    T (``CameraPath.cameras``); returns a Frame with image (T, H, W, 3) and counts (T,).
+    Frames are rendered one after another (``lax.map``), so memory does not grow with T."""
+    return _with_convergence(_render_path_jit, scene, cameras, cfg)
+
+
+def convergence_psnr(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> float:
+    """LDR PSNR (dB) between the reference at k and at 2k samples per pixel side: how far the
+    reference is from converged. A study wants it >= its best pipeline's PSNR + 10 dB."""
+    frame = render(scene, camera, replace(cfg, convergence=True))
+    return float(frame.counts["convergence_psnr"])
