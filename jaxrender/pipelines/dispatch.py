@@ -76,3 +76,34 @@ def shade_pixels(
         return shade_fn(pts)
 
     return dispatch(work, n, fn, out, chunk)
+
+
+def dispatch_lanes(
+    n: Array,
+    fn: Callable[[Array, Array], tuple[Array, Array, Array]],
+    out: Array,
+    chunk: int = DEFAULT_CHUNK,
+) -> tuple[Array, dict]:
+    """Launch lanes ``0 .. n-1`` in chunks: ``fn(lanes int32[chunk], live bool[chunk])`` returns
+    ``(dest int32[chunk], values[chunk, ...], write bool[chunk])`` and ``out[dest] = values``
+    where ``live & write``. For work whose lanes are not one-to-one with outputs (2x2 quads with
+    helper lanes, waves with idle lanes): every lane is evaluated, only some write.
+
+    Returns (out, counts) with ``invocations`` (lanes that wrote), ``lanes`` (chunks x chunk
+    launched) and ``chunks``.
+    """
+    chunk = int(chunk)
+    n_chunks = (n + chunk - 1) // chunk
+    sentinel = out.shape[0]
+
+    def body(k, carry):
+        acc, wrote = carry
+        lanes = k * chunk + jnp.arange(chunk, dtype=jnp.int32)
+        live = lanes < n
+        dest, vals, write = fn(lanes, live)
+        ok = live & write
+        acc = acc.at[jnp.where(ok, dest, sentinel)].set(vals, mode="drop")
+        return acc, wrote + jnp.sum(ok, dtype=jnp.int32)
+
+    out, wrote = jax.lax.fori_loop(0, n_chunks, body, (out, jnp.int32(0)))
+    return out, {"invocations": wrote, "lanes": n_chunks * chunk, "chunks": n_chunks}

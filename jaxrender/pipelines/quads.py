@@ -1,0 +1,78 @@
+"""Sorted-stream helpers for replaying draws: segmented scans and 2x2 quad grouping.
+
+Pixel shaders run in 2x2 quads: a quad of a triangle with k pixels to shade launches 4 lanes,
+4 - k of them helper lanes. Quads here are read off the list of (triangle, pixel) units that a
+pass shades, never estimated.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from jaxrender.types import Array
+
+BIG = 2**31 - 1
+
+
+def segment_starts(*keys: Array) -> Array:
+    """bool[N]: True where any key differs from the previous entry (and at entry 0)."""
+    n = keys[0].shape[0]
+    start = jnp.zeros((n,), bool).at[0].set(True)
+    for k in keys:
+        start = start | jnp.concatenate([jnp.ones((1,), bool), k[1:] != k[:-1]])
+    return start
+
+
+def segmented_cummin(values: Array, start: Array) -> Array:
+    """Inclusive running minimum of float32[N] restarting where ``start`` is True."""
+
+    def comb(a, b):
+        fa, va = a
+        fb, vb = b
+        return fa | fb, jnp.where(fb, vb, jnp.minimum(va, vb))
+
+    _, out = jax.lax.associative_scan(comb, (start, values))
+    return out
+
+
+def exclusive_segmented_cummin(values: Array, start: Array) -> Array:
+    """Minimum of the earlier entries of the same segment (+inf for a segment's first)."""
+    incl = segmented_cummin(values, start)
+    prev = jnp.concatenate([jnp.full((1,), jnp.inf, values.dtype), incl[:-1]])
+    return jnp.where(start, jnp.inf, prev)
+
+
+def first_of_segment_index(start: Array) -> Array:
+    """int32[N]: index of the first entry of each entry's segment."""
+    idx = jnp.arange(start.shape[0], dtype=jnp.int32)
+    return jax.lax.associative_scan(jnp.maximum, jnp.where(start, idx, 0))
+
+
+def quad_keys(pixel: Array, width: int) -> tuple[Array, Array]:
+    """(quad index int32[N] on the grid of 2x2 quads, lane 0..3 inside the quad)."""
+    x, y = pixel % width, pixel // width
+    qw = (width + 1) // 2
+    return (y // 2) * qw + x // 2, (y % 2) * 2 + x % 2
+
+
+def quad_list(tri: Array, pixel: Array, shaded: Array, width: int):
+    """Group the shaded (triangle, pixel) units into 2x2 quads.
+
+    Returns a dict with ``order`` (unit indices sorted by triangle, quad, lane; unshaded last),
+    ``tri``, ``quad``, ``lane`` in that order, ``start`` (bool: first unit of a quad),
+    ``n_quads`` and ``quad_start`` (int32[N]: sorted position of the first unit of quad q for
+    q < n_quads).
+    """
+    quad, lane = quad_keys(pixel, width)
+    n = tri.shape[0]
+    t = jnp.where(shaded, tri, BIG)
+    q = jnp.where(shaded, quad, BIG)
+    idx = jnp.arange(n, dtype=jnp.int32)
+    t_s, q_s, l_s, order = jax.lax.sort((t, q, lane, idx), num_keys=3)
+    live = t_s != BIG
+    start = segment_starts(t_s, q_s) & live
+    n_quads = jnp.sum(start, dtype=jnp.int32)
+    (quad_start,) = jnp.nonzero(start, size=n, fill_value=0)
+    return {"order": order, "tri": t_s, "quad": q_s, "lane": l_s, "start": start,
+            "live": live, "n_quads": n_quads, "quad_start": quad_start.astype(jnp.int32)}
