@@ -72,8 +72,9 @@ def pipeline_entry(fn):
         over = frame.counts.get("overflow")
         if over is not None and not isinstance(over, jax.core.Tracer) and int(over) > 0:
             raise OverflowError(
-                f"{fn.__module__}: {int(over)} items exceeded a capacity; raise "
-                f"fragment_capacity (now {getattr(cfg, 'capacity', '?')})"
+                f"{fn.__module__}: {int(over)} overflow(s) (fragments past fragment_capacity="
+                f"{getattr(cfg, 'capacity', '?')}, or visibility ids that do not fit their "
+                f"bit fields); see the Frame counts"
             )
         return frame
 

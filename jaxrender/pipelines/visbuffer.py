@@ -1,0 +1,270 @@
+"""Visibility-buffer shading (Decima-style): the raster pass writes a 32-bit packed id per
+pixel; shading decodes the id, fetches the triangle, computes perspective-correct barycentrics
+and their analytic derivatives at the pixel, and shades. No quads, so no helper lanes.
+
+Shading work is classified into 8x8 tiles per material and packed into waves of 32 or 64 lanes;
+the work list is ordered by (material, rate, tile, wave), and the wave counts are read off it.
+Software VRS: each pixel gets a rate 1x1, 1x2, 2x1 or 2x2 (width x height) from a per-triangle
+rule (view distance or screen-space speed) or a rate image; the pixels of one material and rate
+in one aligned coarse block share a single shade at the block's first pixel, broadcast to them.
+Waves of coarse pixels are formed on the coarse grid of their rate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.pipelines.base import (PipelineConfig, clip_vertices, dispatch, make_counts,
+                                      pipeline_entry, points_at, poison_on_overflow, visibility)
+from jaxrender.pipelines.quads import BIG, first_of_segment_index, segment_starts
+from jaxrender.pipelines.registry import register
+from jaxrender.scene.camera import world_to_clip
+from jaxrender.shading import shade
+from jaxrender.types import Frame
+
+EMPTY_ID = 0xFFFFFFFF
+RATES = ("1x1", "1x2", "2x1", "2x2")  # width x height, as D3D12_SHADING_RATE_AxB
+RATE_W = (1, 1, 2, 2)
+RATE_H = (1, 2, 1, 2)
+VRS_MODES = ("off", "fixed", "distance", "speed", "image")
+TILE = 8
+
+
+@dataclass(frozen=True)
+class IdLayout:
+    """Bit fields of the 32-bit visibility id, most significant first: micro batch, primitive
+    (inside its batch), instance. A triangle ``t`` of object (instance) ``i`` whose first
+    triangle is ``f`` has local index ``t - f = batch * 2^primitive_bits + primitive``."""
+
+    batch_bits: int = 16
+    primitive_bits: int = 7
+    instance_bits: int = 9
+
+    def __post_init__(self):
+        bits = (self.batch_bits, self.primitive_bits, self.instance_bits)
+        if min(bits) < 0 or sum(bits) > 32:
+            raise ValueError(f"id layout {bits}: fields must be >= 0 and sum to <= 32 bits")
+
+    def pack(self, batch, prim, inst):
+        """(uint32 ids, bool overflow) for int32 arrays; an overflowing field, or an id equal to
+        the empty value 0xFFFFFFFF, sets overflow."""
+        batch, prim, inst = (jnp.asarray(a, jnp.int32) for a in (batch, prim, inst))
+        over = jnp.zeros(batch.shape, bool)
+        for v, bits in ((batch, self.batch_bits), (prim, self.primitive_bits),
+                        (inst, self.instance_bits)):
+            over = over | (v < 0)
+            if bits < 31:  # an int32 cannot exceed a wider field
+                over = over | (v >= (1 << bits))
+        u = lambda a: a.astype(jnp.uint32)  # noqa: E731
+        pb, ib = self.primitive_bits, self.instance_bits
+        ids = (u(batch) << (pb + ib)) | (u(prim) << ib) | u(inst)
+        if self.batch_bits + pb + ib == 32:  # else the all-ones id is unreachable
+            over = over | (ids == jnp.uint32(EMPTY_ID))
+        return ids, over
+
+    def unpack(self, ids):
+        """uint32 ids -> (batch, primitive, instance) int32."""
+        ids = jnp.asarray(ids, jnp.uint32)
+        pb, ib = self.primitive_bits, self.instance_bits
+        mask = lambda b: jnp.uint32((1 << b) - 1)  # noqa: E731
+        inst = ids & mask(ib)
+        prim = (ids >> ib) & mask(pb)
+        batch = (ids >> (pb + ib)) & mask(self.batch_bits)
+        return batch.astype(jnp.int32), prim.astype(jnp.int32), inst.astype(jnp.int32)
+
+
+def pack_ids(layout: IdLayout, batch, prim, inst):
+    """Eager packing that refuses overflow: raises OverflowError naming the field."""
+    b, p, i = (np.asarray(a) for a in (batch, prim, inst))
+    for name, v, bits in (("batch", b, layout.batch_bits), ("primitive", p, layout.primitive_bits),
+                          ("instance", i, layout.instance_bits)):
+        if v.size and (v.min() < 0 or v.max() >= (1 << bits)):
+            raise OverflowError(f"visibility id: {name} value {int(v.max())} does not fit in "
+                                f"{bits} bits")
+    ids, over = layout.pack(b, p, i)
+    if bool(jnp.any(over)):
+        raise OverflowError("visibility id: the packed id equals the reserved empty id")
+    return ids
+
+
+@dataclass(frozen=True)
+class VisBufferConfig(PipelineConfig):
+    """batch_bits / primitive_bits / instance_bits: the 32-bit id layout (see IdLayout).
+    wave_size: 32 or 64 lanes. vrs: off | fixed | distance | speed | image. vrs_rate: the rate
+    of ``fixed`` (1x1, 1x2, 2x1, 2x2). vrs_thresholds (a, b): for ``distance`` (world units from
+    the eye to the triangle's centroid) and ``speed`` (screen pixels per frame of the centroid,
+    from scene.velocity): below a 1x1, from a to b 2x1 (1x2 for mostly vertical motion), from b
+    2x2. rate_image: rows of rate names stretched over the screen (nearest cell)."""
+
+    batch_bits: int = 16
+    primitive_bits: int = 7
+    instance_bits: int = 9
+    wave_size: int = 32
+    vrs: str = "off"
+    vrs_rate: str = "2x2"
+    vrs_thresholds: tuple = (8.0, 20.0)
+    rate_image: tuple = ()
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "vrs_thresholds", tuple(float(t) for t in self.vrs_thresholds))
+        object.__setattr__(self, "rate_image", tuple(tuple(str(r) for r in row)
+                                                     for row in self.rate_image))
+        self.layout  # validates the bit fields
+        if self.wave_size not in (32, 64):
+            raise ValueError(f"wave_size must be 32 or 64, got {self.wave_size}")
+        if self.vrs not in VRS_MODES:
+            raise ValueError(f"vrs must be one of {', '.join(VRS_MODES)}, got {self.vrs!r}")
+        if self.vrs_rate not in RATES:
+            raise ValueError(f"vrs_rate must be one of {', '.join(RATES)}, got {self.vrs_rate!r}")
+        if len(self.vrs_thresholds) != 2 or self.vrs_thresholds[0] > self.vrs_thresholds[1]:
+            raise ValueError(f"vrs_thresholds must be (a, b) with a <= b, got {self.vrs_thresholds}")
+        if self.vrs == "image":
+            if not self.rate_image or len({len(r) for r in self.rate_image}) != 1 \
+                    or not self.rate_image[0]:
+                raise ValueError("vrs = 'image' needs a non-empty rectangular rate_image")
+            bad = sorted({r for row in self.rate_image for r in row} - set(RATES))
+            if bad:
+                raise ValueError(f"rate_image: unknown rate {bad[0]!r}; rates: {', '.join(RATES)}")
+
+    @property
+    def layout(self) -> IdLayout:
+        return IdLayout(self.batch_bits, self.primitive_bits, self.instance_bits)
+
+
+def object_first_triangle(scene) -> jax.Array:
+    """int32[T]: entry i is the first triangle of object i (objects are contiguous)."""
+    t = scene.faces.shape[0]
+    return jnp.full((t,), BIG, jnp.int32).at[scene.tri_object].min(
+        jnp.arange(t, dtype=jnp.int32), mode="drop")
+
+
+def encode(scene, tri, layout: IdLayout):
+    """int32 triangle ids (-1 = empty) -> (uint32 packed ids, overflow count)."""
+    first = object_first_triangle(scene)
+    t = jnp.maximum(tri, 0)
+    inst = scene.tri_object[t]
+    local = t - first[inst]
+    ids, over = layout.pack(local >> layout.primitive_bits,
+                            local & ((1 << layout.primitive_bits) - 1), inst)
+    covered = tri >= 0
+    return (jnp.where(covered, ids, jnp.uint32(EMPTY_ID)),
+            jnp.sum(over & covered, dtype=jnp.int32))
+
+
+def decode(scene, ids, layout: IdLayout):
+    """uint32 packed ids -> int32 triangle ids (-1 for the empty id)."""
+    batch, prim, inst = layout.unpack(ids)
+    first = object_first_triangle(scene)
+    tri = first[jnp.minimum(inst, first.shape[0] - 1)] + (batch << layout.primitive_bits) + prim
+    return jnp.where(ids == jnp.uint32(EMPTY_ID), -1, tri)
+
+
+def triangle_rates(scene, camera, cfg) -> jax.Array:
+    """int32[T] rate code (index into RATES) of every triangle under cfg.vrs."""
+    n = scene.faces.shape[0]
+    a, b = cfg.vrs_thresholds
+    if cfg.vrs == "fixed":
+        return jnp.full((n,), RATES.index(cfg.vrs_rate), jnp.int32)
+    centroid = jnp.mean(scene.positions[scene.faces], axis=1)
+    if cfg.vrs == "distance":
+        d = jnp.sqrt(jnp.sum(jnp.square(centroid - camera.eye[None, :]), axis=-1))
+        return jnp.where(d < a, 0, jnp.where(d < b, 2, 3)).astype(jnp.int32)
+    if cfg.vrs == "speed":
+        vel = jnp.mean(scene.velocity[scene.faces], axis=1)
+        aspect = cfg.width / cfg.height
+        c0 = world_to_clip(centroid, camera, aspect)
+        c1 = world_to_clip(centroid + vel, camera, aspect)
+        win = lambda c: c[:, :2] / jnp.maximum(c[:, 3:4], 1e-6)  # noqa: E731
+        dd = (win(c1) - win(c0)) * (jnp.asarray([cfg.width, cfg.height], jnp.float32) * 0.5)
+        s = jnp.sqrt(jnp.sum(dd * dd, axis=-1))
+        mid = jnp.where(jnp.abs(dd[:, 0]) >= jnp.abs(dd[:, 1]), 2, 1)
+        return jnp.where(s < a, 0, jnp.where(s < b, mid, 3)).astype(jnp.int32)
+    return jnp.zeros((n,), jnp.int32)
+
+
+def pixel_rates(scene, camera, cfg, tri) -> jax.Array:
+    """int32[H, W] rate code of every pixel (0 = 1x1 where VRS is off)."""
+    h, w = cfg.height, cfg.width
+    if cfg.vrs == "off":
+        return jnp.zeros((h, w), jnp.int32)
+    if cfg.vrs == "image":
+        grid = np.array([[RATES.index(r) for r in row] for row in cfg.rate_image], np.int32)
+        rows = np.arange(h) * grid.shape[0] // h
+        cols = np.arange(w) * grid.shape[1] // w
+        return jnp.asarray(grid[rows[:, None], cols[None, :]])
+    return triangle_rates(scene, camera, cfg)[jnp.maximum(tri, 0)]
+
+
+@register("visbuffer", VisBufferConfig)
+@pipeline_entry
+def render(scene, camera, cfg: VisBufferConfig) -> Frame:
+    """Visibility buffer: packed 32-bit ids, shading from the id in material tiles/waves, VRS."""
+    w, h = cfg.width, cfg.height
+    n_pix = w * h
+    layout = cfg.layout
+    with jax.named_scope("visibility"):
+        vis = visibility(scene, camera, cfg)
+        ids, id_overflow = encode(scene, vis.tri_id, layout)  # the buffer the raster pass writes
+
+    with jax.named_scope("classify"):
+        tri = decode(scene, ids, layout)  # the classification pass reads the ids
+        covered = tri >= 0
+        mat = jnp.where(covered, scene.tri_material[jnp.maximum(tri, 0)], BIG).reshape(-1)
+        rate = pixel_rates(scene, camera, cfg, tri).reshape(-1)
+        pix = jnp.arange(n_pix, dtype=jnp.int32)
+        x, y = pix % w, pix // w
+        rw = jnp.asarray(RATE_W, jnp.int32)[rate]
+        rh = jnp.asarray(RATE_H, jnp.int32)[rate]
+        bx, by = x // rw, y // rh
+        # Coarse pixels: one shade per (material, rate, aligned block), at its first pixel.
+        m_s, r_s, by_s, bx_s, p_s = jax.lax.sort((mat, rate, by, bx, pix), num_keys=5)
+        live = m_s != BIG
+        start = segment_starts(m_s, r_s, by_s, bx_s) & live
+        anchor_sorted = p_s[first_of_segment_index(start)]
+        anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted)
+        is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start)
+        # Waves: coarse pixels of one material and rate, by 8x8 tile of the coarse grid.
+        tiles_w = -(-w // TILE)
+        tile = (by // TILE) * tiles_w + bx // TILE
+        sub = ((by % TILE) * TILE + bx % TILE) // cfg.wave_size
+        big = lambda a: jnp.where(is_anchor, a, BIG)  # noqa: E731
+        wm, wr, wt, wsub, work = jax.lax.sort((big(mat), big(rate), big(tile), big(sub), pix),
+                                              num_keys=4)
+        n_work = jnp.sum(is_anchor, dtype=jnp.int32)
+        waves = jnp.sum(segment_starts(wm, wr, wt, wsub) & (wm != BIG), dtype=jnp.int32)
+
+    with jax.named_scope("shade"):
+        clip = clip_vertices(scene, camera, cfg)
+        ids_flat = ids.reshape(-1)
+
+        def fn(items, live_lanes):
+            t = decode(scene, ids_flat[items], layout)  # shading from the id
+            pts = points_at(scene, camera, clip, cfg, jnp.where(live_lanes, t, -1), items)
+            return shade(pts, scene)
+
+        out, dc = dispatch(work, n_work, fn, jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
+
+    with jax.named_scope("broadcast"):
+        image = jnp.where(covered.reshape(-1)[:, None], out[anchor], 0.0).reshape(h, w, 3)
+        overflow = id_overflow + vis.counts["overflow"]
+        image = poison_on_overflow(image, overflow)
+
+    inv = dc["invocations"]
+    n_cov = jnp.sum(covered, dtype=jnp.int32)
+    id_bytes = 4
+    written = n_cov * (id_bytes + 4)  # id + depth
+    read = n_pix * id_bytes + inv * id_bytes  # classification reads every id, shading its own
+    counts = make_counts(
+        shade_invocations=inv, covered_pixels=n_cov, waves=waves,
+        lane_utilization=inv.astype(jnp.float32)
+        / jnp.maximum(waves * cfg.wave_size, 1).astype(jnp.float32),
+        bytes_intermediate=written + read, id_overflow=id_overflow,
+        overflow=overflow, alpha_invocations=vis.counts["alpha_invocations"])
+    aux = {"ids": ids, "rate": rate.reshape(h, w),
+           "shade_count": is_anchor.astype(jnp.int32).reshape(h, w)}
+    return Frame(image, counts, aux)
