@@ -1,0 +1,176 @@
+"""The reference pipeline: the same samples as the rasterizer's own multi-sample path, exact box
+filtering of a known edge, texture LOD from the sample footprint, alpha test, counts read off
+the work, one compile for every camera and every k, camera paths, convergence estimate."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrender.pipelines import get_pipeline, make_config
+from jaxrender.pipelines.reference import (DEFAULT_K, ReferenceConfig, _offset, _render_jit,
+                                           convergence_psnr, render, render_path)
+from jaxrender.raster import rasterize
+from jaxrender.raster import samples as sample_patterns
+from jaxrender.raster.setup import SUBPIXEL_BITS
+from jaxrender.scene import Material, MeshPart, look_at, make_lights
+from jaxrender.scene.builtin import checker_image
+from jaxrender.scene.camera_path import stack
+from jaxrender.scene.scene import build_scene
+from jaxrender.shading import shade, surface_points
+
+W, H = 48, 32
+_EXACT = 1e-6  # same arithmetic, different program: float32 rounding only
+EDGE_X = 30.3  # window x of quad 1's left edge (pixel 30 is 3/4 covered at k = 8)
+GREY = 0.6  # quad 1's radiance: albedo 0.6, E = pi at normal incidence, Lambert
+
+
+def _quad(corners, normal, material) -> MeshPart:
+    pos = np.asarray(corners, np.float64)
+    uvs = np.asarray([[0, 0], [1, 0], [1, 1], [0, 1]], np.float64)
+    return MeshPart(pos, np.asarray([[0, 1, 2], [0, 2, 3]]), np.tile(normal, (4, 1)), uvs,
+                    material=material)
+
+
+def _camera(x=0.0):
+    # fov 90, aspect 1.5: window x = (x_world / 1.5 / depth + 1) * W / 2 at depth 1
+    return look_at((x, 0.0, 0.0), (x, 0.0, -1.0), fov_y_deg=90.0, near=0.1, far=20.0)
+
+
+@pytest.fixture(scope="module")
+def scene_a():
+    """A textured quad receding in depth on the left (LOD varies) and an untextured grey quad
+    facing the camera whose left edge lies at window x = EDGE_X, under a frontal sun."""
+    edge = (EDGE_X * 2.0 / W - 1.0) * 1.5
+    left = _quad([(-1.4, -1, -1), (-0.2, -1, -1), (-0.2, 1, -4), (-1.4, 1, -4)],
+                 (0.0, 0.8, 0.6), 0)
+    right = _quad([(edge, -2, -1), (3, -2, -1), (3, 2, -1), (edge, 2, -1)], (0.0, 0.0, 1.0), 1)
+    mats = [Material("checker", albedo=(1, 1, 1), texture=0),
+            Material("grey", albedo=(GREY,) * 3)]
+    lights = make_lights([((0, 0, 1), np.pi)], ambient=0.0)
+    return build_scene([left, right], mats, [checker_image(64, 8)], lights, _camera(),
+                       name="reference_test")
+
+
+def _cfg(k, **kw):
+    return ReferenceConfig(width=W, height=H, k=k, **kw)
+
+
+def test_config_and_registry():
+    assert get_pipeline("reference").config_cls is ReferenceConfig
+    assert make_config("reference", width=8, height=4, k=3).k == 3
+    assert ReferenceConfig().k == DEFAULT_K == 8
+    with pytest.raises(ValueError, match="k must be"):
+        ReferenceConfig(k=0)
+
+
+def test_offsets_are_the_stratified_pattern():
+    for k in (1, 2, 3, 5, 8, 16, 33):
+        want = np.asarray(sample_patterns.to_fixed(sample_patterns.stratified(k), SUBPIXEL_BITS))
+        got = np.asarray(_offset(np.arange(k * k), k)).T
+        np.testing.assert_array_equal(got, want, err_msg=f"k={k}")
+
+
+def test_equals_rasterizer_samples_shaded_and_averaged(scene_a):
+    """Per sample: the rasterizer's own S-sample visibility, surface points with the
+    derivatives scaled to the sample spacing (1/k), shade(), then the mean."""
+    k, cam = 2, _camera()
+    frame = render(scene_a, cam, _cfg(k))
+    vis = rasterize(scene_a.positions, scene_a.faces, cam, W, H,
+                    sample_offsets=sample_patterns.stratified(k))
+
+    @jax.jit
+    def shade_sample(tri, bary, ddx, ddy):
+        pts = surface_points(scene_a, cam, tri.reshape(-1), bary.reshape(-1, 3),
+                             ddx.reshape(-1, 3) / k, ddy.reshape(-1, 3) / k)
+        return shade(pts, scene_a)
+
+    acc = jnp.zeros((H * W, 3), jnp.float32)
+    for s in range(k * k):
+        acc = acc + shade_sample(vis.tri_id[s], vis.bary[s], vis.dbary_dx[s], vis.dbary_dy[s])
+    want = np.asarray(acc * (1.0 / (k * k))).reshape(H, W, 3)
+    np.testing.assert_allclose(np.asarray(frame.image), want, atol=_EXACT, rtol=_EXACT,
+                               err_msg="reference vs rasterize(stratified) + shade")
+
+    covered = np.asarray(vis.tri_id) >= 0
+    c = {key: int(v) for key, v in frame.counts.items()}
+    assert c["shade_invocations"] == covered.sum()
+    assert c["covered_pixels"] == covered.any(axis=0).sum()
+    assert c["fragments"] == int(vis.counts["fragments"])
+    assert c["samples_per_pixel"] == k * k
+    assert c["lanes"] >= c["shade_invocations"]
+    assert c["helper_lanes"] == c["lanes"] - c["shade_invocations"]
+    np.testing.assert_array_equal(np.asarray(frame.aux["coverage"]), covered.any(axis=0))
+
+
+def test_box_filter_of_a_known_edge(scene_a):
+    """Pixel 30 holds the edge at x = 30.3: 6 of the 8 cell columns are covered at k = 8."""
+    img = np.asarray(render(scene_a, _camera(), _cfg(8)).image)
+    np.testing.assert_allclose(img[:, 31:], GREY, rtol=1e-5, err_msg="inside the quad")
+    np.testing.assert_allclose(img[:, 30], 0.75 * GREY, rtol=1e-5, err_msg="edge pixel")
+    np.testing.assert_array_equal(img[:, 25:30], 0.0, err_msg="background")
+
+
+def test_lod_follows_the_sample_footprint(scene_a):
+    """The checker, minified on the receding quad, is filtered at the sample's footprint: more
+    samples means sharper lookups each, yet the box-filtered result converges."""
+    cam = _camera()
+    imgs = {k: np.asarray(render(scene_a, cam, _cfg(k)).image[:, :20]) for k in (1, 4, 8)}
+    assert np.abs(imgs[8] - imgs[4]).mean() < np.abs(imgs[4] - imgs[1]).mean()
+
+
+def test_one_compile_for_any_camera_and_k(scene_a):
+    render(scene_a, _camera(), _cfg(2))
+    before = _render_jit._cache_size()
+    for x, k in ((0.1, 2), (-0.2, 3), (0.05, 8)):
+        render(scene_a, _camera(x), _cfg(k))
+    assert _render_jit._cache_size() == before
+
+
+def test_camera_path_equals_frame_by_frame(scene_a):
+    cams = [_camera(0.0), _camera(0.15)]
+    frames = render_path(scene_a, stack(cams), _cfg(2))
+    assert frames.image.shape == (2, H, W, 3)
+    assert frames.counts["shade_invocations"].shape == (2,)
+    for t, cam in enumerate(cams):
+        one = render(scene_a, cam, _cfg(2))
+        np.testing.assert_allclose(np.asarray(frames.image[t]), np.asarray(one.image),
+                                   atol=_EXACT, err_msg=f"frame {t}")
+        assert int(frames.counts["shade_invocations"][t]) == int(one.counts["shade_invocations"])
+
+
+def test_convergence_estimate(scene_a):
+    cam = _camera()
+    coarse = convergence_psnr(scene_a, cam, _cfg(2))
+    fine = convergence_psnr(scene_a, cam, _cfg(8))
+    assert np.isfinite(coarse) and fine > coarse + 6.0, (coarse, fine)
+    frame = render(scene_a, cam, _cfg(8, convergence=True))
+    assert float(frame.counts["convergence_psnr"]) == pytest.approx(fine, abs=1e-4)
+
+
+def test_alpha_test_discards_before_the_depth_test():
+    """An alpha-tested quad, transparent on its left half, in front of a red quad: the left
+    half of the image is the red quad, the right half the front quad."""
+    tex = np.ones((64, 64, 4))
+    tex[:, :32, 3] = 0.0  # u < 0.5 transparent
+    front = _quad([(-2, -2, -1), (2, -2, -1), (2, 2, -1), (-2, 2, -1)], (0, 0, 1), 0)
+    back = _quad([(-4, -4, -2), (4, -4, -2), (4, 4, -2), (-4, 4, -2)], (0, 0, 1), 1)
+    mats = [Material("leaf", albedo=(0.9, 0.9, 0.9), texture=0, alpha_tested=True,
+                     alpha_cutoff=0.5),
+            Material("red", albedo=(0.8, 0.1, 0.1))]
+    scene = build_scene([front, back], mats, [tex], make_lights([((0, 0, 1), np.pi)]),
+                        _camera(), name="alpha_test")
+    assert scene.effects.alpha_test
+    img = np.asarray(render(scene, _camera(), _cfg(4)).image)
+    np.testing.assert_allclose(img[:, : W // 2 - 4], np.broadcast_to([0.8, 0.1, 0.1], (H, 20, 3)),
+                               rtol=1e-5, err_msg="seen through the discarded half")
+    np.testing.assert_allclose(img[:, W // 2 + 4:], 0.9, rtol=1e-5, err_msg="opaque half")
+    # all fragments discarded (cutoff above any alpha): only the red quad remains
+    opaque_never = dataclasses.replace(scene, materials=dataclasses.replace(
+        scene.materials, alpha_cutoff=scene.materials.alpha_cutoff.at[0].set(2.0)))
+    img2 = np.asarray(render(opaque_never, _camera(), _cfg(4)).image)
+    np.testing.assert_allclose(img2, np.broadcast_to([0.8, 0.1, 0.1], (H, W, 3)), rtol=1e-5)
