@@ -1,0 +1,221 @@
+"""DACS, deferred adaptive compute shading (Mallett and Yuksel, HPG 2018).
+
+Sampling plan: the levels of ``dacs_levels`` inside each s x s block (s = 4: five levels;
+s = 8: seven). Level 0 is always shaded. At each later level a pixel is shaded when its four
+parents (on earlier levels, already final) are dissimilar: a parent's surface id (triangle,
+object or material, from the full-resolution visibility buffer) differs from the pixel's own,
+or the variance of the parents' luma is at or above ``threshold``. Otherwise the pixel is the
+average of its parents.
+
+Work: each level's pixels to shade are compacted and shaded through the shared chunked
+dispatch, so the compiled program evaluates the shader only for them. The decisions also drive
+``dacs_warp``'s simulation of the paper's SEARCH/SHADE warp scheme.
+
+Borders: parents outside the image are left out of the test and of the average. The average
+uses opposite parent pairs that lie wholly inside (so a linear ramp is still reproduced
+exactly at a border), else the parents that are inside; every pixel beyond level 0 has at
+least one parent inside, so no size (odd or 1 pixel wide) gives a NaN.
+
+The threshold is traced: ``render_threshold(scene, camera, threshold, cfg)`` sweeps it without
+recompiling; the registered ``render`` calls it with ``cfg.threshold``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.pipelines import dacs_warp
+from jaxrender.pipelines.base import (PipelineConfig, make_counts, points_from_vis,
+                                      poison_on_overflow, visibility)
+from jaxrender.pipelines.dacs_levels import SPACINGS, level_map, level_pixels, parent_pairs
+from jaxrender.pipelines.deferred import pack_gbuffer, unpack_gbuffer
+from jaxrender.pipelines.dispatch import compact, dispatch
+from jaxrender.pipelines.pixel_ids import (ID_KINDS, LUMAS, SPACES, check_choice, luma,
+                                           surface_ids)
+from jaxrender.pipelines.registry import register
+from jaxrender.shading import shade
+from jaxrender.types import Array, Frame
+
+
+@dataclass(frozen=True)
+class DacsConfig(PipelineConfig):
+    """threshold: luma variance at or above which parents are dissimilar (0: shade everything;
+    inf: ids alone decide). spacing: initial spacing 4 (five levels) or 8 (seven).
+    ids: which surface id separates parents: triangle, object, material or none.
+    luma: ``simple`` (0.25R + 0.5G + 0.25B) or ``rec709``; variance_space: luma of the
+    ``display`` (clamped, sRGB-encoded) or ``linear`` colour.
+    warp_width, warp_batches: the simulated warp (32 or 64 lanes) and the groups of W pixels
+    each warp searches per level."""
+
+    threshold: float = 0.01
+    spacing: int = 4
+    ids: str = "object"
+    luma: str = "simple"
+    variance_space: str = "display"
+    warp_width: int = 32
+    warp_batches: int = 4
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not float(self.threshold) >= 0.0:
+            raise ValueError(f"threshold must be >= 0, got {self.threshold}")
+        check_choice("spacing", self.spacing, SPACINGS)
+        check_choice("ids", self.ids, ID_KINDS)
+        check_choice("luma", self.luma, tuple(LUMAS))
+        check_choice("variance_space", self.variance_space, SPACES)
+        check_choice("warp_width", self.warp_width, dacs_warp.WARP_WIDTHS)
+        if int(self.warp_batches) < 1:
+            raise ValueError(f"warp_batches must be >= 1, got {self.warp_batches}")
+
+
+def _parents(idx: np.ndarray, level: int, h: int, w: int, spacing: int):
+    """Static parents of the flat pixels ``idx``: indices int[n, 4] (clamped), inside bool[n, 4]
+    and averaging weights float32[n, 4] (complete opposite pairs, else the inside parents)."""
+    y, x = idx // w, idx % w
+    pairs = parent_pairs(level, spacing)
+    offs = [o for pair in pairs for o in pair]
+    py = np.stack([y + dy for dy, _ in offs], axis=1)
+    px = np.stack([x + dx for _, dx in offs], axis=1)
+    ins = (py >= 0) & (py < h) & (px >= 0) & (px < w)
+    pidx = np.clip(py, 0, h - 1) * w + np.clip(px, 0, w - 1)
+    pair_ok = np.stack([ins[:, 0] & ins[:, 1], ins[:, 2] & ins[:, 3]], axis=1)
+    wts = np.repeat(pair_ok, 2, axis=1).astype(np.float64)
+    none = ~np.any(pair_ok, axis=1)
+    wts[none] = ins[none]
+    wts /= np.maximum(wts.sum(axis=1, keepdims=True), 1.0)
+    return pidx.astype(np.int32), ins, wts.astype(np.float32)
+
+
+def level_tables(h: int, w: int, spacing: int) -> dict:
+    """Static per-level tables padded to the largest level (n_max pixels): ``pix`` int32[L, n],
+    ``live`` bool[L, n], parents ``pidx`` int32[L, n, 4], ``ins`` bool[L, n, 4], averaging
+    ``wts`` float32[L, n, 4], ``cnt`` float32[L, n] (parents inside, at least 1) and ``sizes``."""
+    per = level_pixels(h, w, spacing)
+    n_max = max(len(p) for p in per)
+    n_l = len(per)
+    t = {"pix": np.zeros((n_l, n_max), np.int32), "live": np.zeros((n_l, n_max), bool),
+         "pidx": np.zeros((n_l, n_max, 4), np.int32), "ins": np.zeros((n_l, n_max, 4), bool),
+         "wts": np.zeros((n_l, n_max, 4), np.float32), "sizes": [len(p) for p in per]}
+    for level, idx in enumerate(per):
+        n = len(idx)
+        t["pix"][level, :n] = idx
+        t["live"][level, :n] = True
+        if level > 0 and n:
+            pidx, ins, wts = _parents(idx, level, h, w, spacing)
+            t["pidx"][level, :n], t["ins"][level, :n], t["wts"][level, :n] = pidx, ins, wts
+    t["cnt"] = np.maximum(t["ins"].sum(axis=2), 1).astype(np.float32)
+    return t
+
+
+def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, covered: Array,
+                     threshold: Array, *, spacing: int = 4, luma_kind: str = "simple",
+                     space: str = "display", chunk: int = 4096, warp_width: int = 32,
+                     warp_batches: int = 4):
+    """The DACS plan and reconstruction over any shading function.
+
+    ``shade_fn(pixels int32[c], live bool[c]) -> float32[c, 3]`` shades flat pixel indices;
+    ``ids`` int32[H, W] surface ids (-1 uncovered); ``covered`` bool[H, W] (uncovered pixels are
+    never shaded and come out 0). The levels run in a ``fori_loop`` (one copy of the shader in
+    the program); each level compacts its pixels to shade and dispatches them in chunks.
+    Returns (image float32[H, W, 3], shaded bool[H, W], level int32[H, W], counts)."""
+    h, w = ids.shape
+    n_pix = h * w
+    tab = level_tables(h, w, spacing)
+    n_levels_, n_max = tab["pix"].shape
+    ids_f = ids.reshape(-1)
+    cov_f = covered.reshape(-1)
+    thr = jnp.asarray(threshold, jnp.float32)
+    t = {k: jnp.asarray(v) for k, v in tab.items() if k != "sizes"}
+
+    def level_body(level, carry):
+        img, needs, inv, lanes, chunks = carry
+        pix, live = t["pix"][level], t["live"][level]
+        pidx, ins, wts = t["pidx"][level], t["ins"][level], t["wts"][level]
+        c = img[pidx]  # [n, 4, 3] parents, final from earlier levels
+        with jax.named_scope("decide"):
+            id_diff = jnp.any(ins & (ids_f[pidx] != ids_f[pix][:, None]), axis=1)
+            lum = luma(c, luma_kind, space)  # [n, 4]
+            insf = ins.astype(jnp.float32)
+            mean = jnp.sum(insf * lum, axis=1) / t["cnt"][level]
+            var = jnp.sum(insf * (lum - mean[:, None]) ** 2, axis=1) / t["cnt"][level]
+            cov = cov_f[pix] & live
+            need = cov & ((level == 0) | id_diff | (var >= thr))
+        with jax.named_scope("interpolate"):
+            interp = jnp.sum(wts[:, :, None] * c, axis=1)
+            val = jnp.where((cov & ~need)[:, None], interp, 0.0)
+            img = img.at[jnp.where(live, pix, n_pix)].set(val, mode="drop")
+        with jax.named_scope("shade"):
+            work, n = compact(need)
+            img, dc = dispatch(pix[work], n, shade_fn, img, chunk)
+        needs = needs.at[level].set(need)
+        return (img, needs, inv + dc["invocations"], lanes + dc["lanes"],
+                chunks + dc["chunks"])
+
+    z = jnp.int32(0)
+    init = (jnp.zeros((n_pix, 3), jnp.float32), jnp.zeros((n_levels_, n_max), bool), z, z, z)
+    img, needs, inv, lanes, chunks = jax.lax.fori_loop(0, n_levels_, level_body, init)
+    sizes = tab["sizes"]
+    warp = dacs_warp.simulate([needs[k, :sizes[k]] for k in range(n_levels_)], warp_width,
+                              warp_batches)
+    shaded = jnp.zeros((n_pix + 1,), bool).at[jnp.where(t["live"], t["pix"], n_pix)].set(
+        needs)[:n_pix]
+    counts = {"shade_invocations": inv, "dispatch_lanes": lanes, "dispatch_chunks": chunks,
+              "covered_pixels": jnp.sum(covered, dtype=jnp.int32), **warp}
+    level = jnp.asarray(level_map(h, w, spacing))
+    return img.reshape(h, w, 3), shaded.reshape(h, w), level, counts
+
+
+def _render(scene, camera, threshold, cfg: DacsConfig) -> Frame:
+    with jax.named_scope("visibility"):
+        vis = visibility(scene, camera, cfg)
+        covered = vis.tri_id >= 0
+        ids = surface_ids(scene, vis.tri_id, cfg.ids)
+
+    def shade_fn(items, live):
+        # The deferred lighting pass's own path (G-buffer channels -> points -> shade), on the
+        # attributes of just these pixels: DACS is deferred shading with an adaptive plan.
+        rows = pack_gbuffer(points_from_vis(scene, camera, vis, items))
+        return shade(unpack_gbuffer(rows, camera, live), scene)
+
+    with jax.named_scope("dacs"):
+        image, shaded, level, c = dacs_reconstruct(
+            shade_fn, ids, covered, threshold, spacing=cfg.spacing, luma_kind=cfg.luma,
+            space=cfg.variance_space, chunk=cfg.chunk, warp_width=cfg.warp_width,
+            warp_batches=cfg.warp_batches)
+    image = poison_on_overflow(image, vis.counts["overflow"])
+    warps = c.pop("warps")
+    counts = make_counts(waves=warps, lane_utilization=c["warp_lane_utilization"],
+                         shaded_fraction=c["shade_invocations"].astype(jnp.float32)
+                         / jnp.maximum(c["covered_pixels"], 1).astype(jnp.float32),
+                         alpha_invocations=vis.counts["alpha_invocations"],
+                         overflow=vis.counts["overflow"], **c)
+    return Frame(image, counts, {"level": level, "shaded": shaded})
+
+
+_render_jit = jax.jit(_render, static_argnums=3)
+
+
+def render_threshold(scene, camera, threshold, cfg: DacsConfig) -> Frame:
+    """DACS with a traced ``threshold`` (cfg.threshold ignored): a sweep compiles once."""
+    cfg = dataclasses.replace(cfg, threshold=0.0)
+    frame = _render_jit(scene, camera, jnp.asarray(threshold, jnp.float32), cfg)
+    over = frame.counts["overflow"]
+    if not isinstance(over, jax.core.Tracer) and int(over) > 0:
+        raise OverflowError(f"dacs: {int(over)} fragments exceeded fragment_capacity "
+                            f"({cfg.capacity})")
+    return frame
+
+
+@register("dacs", DacsConfig)
+def render(scene, camera, cfg: DacsConfig) -> Frame:
+    """DACS: five (seven) levels per block, shade where parents differ, else interpolate."""
+    return render_threshold(scene, camera, cfg.threshold, cfg)
+
+
+render.jitted = jax.jit(render, static_argnums=2)
