@@ -1,0 +1,94 @@
+"""Forward shading: hand-worked invocation and helper-lane counts, pre-pass, foliage overdraw."""
+
+import jax
+import numpy as np
+import pytest
+from fdv_scenes import FOLIAGE_CARDS, H, W, foliage_scene, make_scene, rect_part, tri_part
+
+from jaxrender.pipelines import COUNT_KEYS, get_pipeline, make_config
+
+FORWARD = get_pipeline("forward")
+NEAR = rect_part(0, 0, 4, 4, 2.0)  # 16 pixels
+FAR = rect_part(2, 2, 6, 6, 4.0)  # 16 pixels, 4 of them behind NEAR
+
+
+def counts(scene, **params):
+    frame = FORWARD.render(scene, scene.camera, make_config("forward", width=W, height=H,
+                                                            **params))
+    return {k: float(v) for k, v in frame.counts.items()}, frame
+
+
+@pytest.mark.parametrize("order, prepass, expected", [
+    ("front_to_back", False, 28),  # NEAR 16, then FAR fails the depth test on the 4 overlapped
+    ("back_to_front", False, 32),  # FAR 16, then NEAR passes everywhere: 4 pixels shaded twice
+    ("front_to_back", True, 28),   # pre-pass: one shade per visible pixel, whatever the order
+    ("back_to_front", True, 28),
+])
+def test_two_overlapping_quads(order, prepass, expected):
+    parts = [NEAR, FAR] if order == "front_to_back" else [FAR, NEAR]
+    c, frame = counts(make_scene(parts), z_prepass=prepass)
+    assert c["shade_invocations"] == expected
+    assert c["covered_pixels"] == 28
+    assert c["fragments"] == 32
+    assert set(COUNT_KEYS) <= set(c)
+    np.testing.assert_allclose(c["overshading"], expected / 28, rtol=1e-6)
+    assert int(frame.aux["shade_count"].sum()) == expected
+
+
+def test_image_does_not_depend_on_order_or_prepass():
+    imgs = [np.asarray(counts(make_scene(p), z_prepass=z)[1].image)
+            for p in ([NEAR, FAR], [FAR, NEAR]) for z in (False, True)]
+    for img in imgs[1:]:
+        np.testing.assert_allclose(img, imgs[0], atol=1e-6)
+
+
+def test_helper_lanes_of_a_small_triangle():
+    # Window corners (1, 1), (4.9, 1), (1, 4.9): centres with x + y < 2.9 inside the offset
+    # triangle: (1,1) (2,1) (3,1) (1,2) (2,2) (1,3). Quads (2x2-aligned): (0,0) holds 1 pixel,
+    # (1,0) 2, (0,1) 2, (1,1) 1: 4 quads, 16 lanes, 6 shaded, 10 helpers.
+    c, frame = counts(make_scene([tri_part([(1, 1), (4.9, 1), (1, 4.9)], 2.0)]))
+    expected = np.zeros((H, W), np.int32)
+    for x, y in [(1, 1), (2, 1), (3, 1), (1, 2), (2, 2), (1, 3)]:
+        expected[y, x] = 1
+    np.testing.assert_array_equal(np.asarray(frame.aux["shade_count"]), expected)
+    assert (c["shade_invocations"], c["quads"], c["helper_lanes"]) == (6, 4, 10)
+
+
+def test_four_scattered_pixels_cost_sixteen_lanes():
+    # A sliver along y = 1.5 + (x - 1.5) / 2 covers the centres of pixels (1,1), (3,2), (5,3),
+    # (7,4): one pixel in each of four quads, so 4 invocations launch 16 lanes.
+    c, frame = counts(make_scene([tri_part([(0.9, 1.0), (9.0, 5.25), (0.9, 1.4)], 2.0)]))
+    ys, xs = np.nonzero(np.asarray(frame.aux["shade_count"]))
+    assert sorted(zip(xs.tolist(), ys.tolist())) == [(1, 1), (3, 2), (5, 3), (7, 4)]
+    assert c["shade_invocations"] == 4
+    assert c["quads"] * 4 == 16
+    assert c["helper_lanes"] == 12
+
+
+def test_foliage_without_prepass_shades_strictly_more():
+    scene = foliage_scene()
+    plain, f0 = counts(scene)
+    pre, f1 = counts(scene, z_prepass=True)
+    assert plain["shade_invocations"] > pre["shade_invocations"]
+    assert pre["shade_invocations"] == pre["covered_pixels"]
+    assert plain["alpha_invocations"] > 0  # the leaves are alpha-tested
+    np.testing.assert_allclose(np.asarray(f0.image), np.asarray(f1.image), atol=1e-6)
+    assert FOLIAGE_CARDS > 0
+
+
+def test_camera_move_does_not_recompile():
+    scene = make_scene([NEAR, FAR])
+    cfg = make_config("forward", width=W, height=H)
+    FORWARD.render(scene, scene.camera, cfg)
+    before = FORWARD.render.jitted._cache_size()
+    moved = jax.tree_util.tree_map(lambda a: a, scene.camera)
+    moved = type(moved)(moved.eye + 0.01, moved.rotation, moved.fov_y, moved.near, moved.far)
+    FORWARD.render(scene, moved, cfg)
+    assert FORWARD.render.jitted._cache_size() == before
+
+
+def test_config_rejects_bad_values():
+    with pytest.raises(ValueError, match="msaa"):
+        make_config("forward", msaa=3)
+    with pytest.raises(KeyError, match="no parameter"):
+        make_config("forward", z_pre_pass=True)
