@@ -27,7 +27,7 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 
-from jaxrender.pipelines.dispatch import DEFAULT_CHUNK, shade_pixels
+from jaxrender.pipelines.dispatch import shade_pixels
 from jaxrender.pipelines.registry import RenderConfig, register
 from jaxrender.raster.coverage import EMPTY_KEY, depth_key
 from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
@@ -38,9 +38,12 @@ from jaxrender.scene.scene import Scene
 from jaxrender.shading import alpha_test, shade, surface_points
 from jaxrender.types import Array, Frame
 
-# Chosen from the convergence check (benchmarks/bench_reference.py --convergence; numbers in
-# the module's tests and the issue-4 report): k = 8 gives k-vs-2k LDR PSNR of 38-52 dB on the
-# built-in scenes at 96x64 (spheres and room above 45 dB), k = 16 adds 3-6 dB at 4x the cost.
+# Chosen from the convergence check (python benchmarks/bench_reference.py --convergence
+# --scenes all --width 96 --height 64 --k 2 4 8 16): PSNR(k, 2k) in LDR dB at k = 8 was
+# stripes 41.1, spheres 51.9, foliage 43.7, thin 33.7, terrain 57.3, sliver 55.1, room 49.3,
+# many_small 54.4; at k = 16 every scene is >= 46 dB (thin 46.3, the rest 50-68). k = 8 is
+# converged >= 40 dB except for sub-pixel wires aligned with the pixel grid (thin), where the
+# regular grid of cell centres converges in steps: studies of such scenes should set k = 16.
 DEFAULT_K = 8
 
 
@@ -51,7 +54,7 @@ class ReferenceConfig(RenderConfig):
     (LDR PSNR between the k and 2k images; costs 5x the plain render)."""
 
     k: int = DEFAULT_K
-    chunk: int = DEFAULT_CHUNK
+    chunk: int = 1 << 16
     convergence: bool = False
 
     def __post_init__(self):
