@@ -26,9 +26,12 @@ _SAFE_VERTEX = (0.0, 0.0, 0.0, 1.0)  # stands in for a dropped slot; never produ
 
 
 def default_work_capacity(n_tris: int, width: int, height: int) -> int:
-    """Chunk size of the pixel work list: about two bounding-box pixels per screen pixel plus
-    one per triangle, rounded up to 2^16. A frame needing more runs more chunks."""
-    want = 2 * width * height + 2 * n_tris
+    """Chunk size of the pixel work list: two bounding-box pixels per screen pixel plus one
+    for every other triangle, rounded up to 2^16. A static chunk costs its full size whatever
+    it holds, so it should fit a typical frame's items without much slack; a frame that needs
+    more runs more chunks (measured 2026-11-22: a 1080p terrain needed 4.1-4.2M items for any
+    triangle count from 2.5k to 2.6M)."""
+    want = 2 * width * height + n_tris // 2
     return int(min(max(1 << 16, -(-want // (1 << 16)) * (1 << 16)), 1 << 25))
 
 

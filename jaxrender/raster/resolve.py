@@ -31,38 +31,45 @@ def resolve(
 
 
 def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int, offset_px: Array):
-    """Perspective-correct barycentrics and d/dx, d/dy for int32[H, W] triangle ids."""
+    """Perspective-correct barycentrics and d/dx, d/dy for int32[H, W] triangle ids.
+
+    Written as explicit scalar algebra on the nine gathered (x, y, w) values so that XLA fuses
+    the whole resolve into one pass over the pixels.
+    """
     covered = tri >= 0
     verts = clip[faces[jnp.maximum(tri, 0)]]  # [H, W, 3, 4]
-    c = jnp.stack([verts[..., 0], verts[..., 1], verts[..., 3]], axis=-1)  # [H, W, 3, 3]
-    rows = jnp.stack(
-        [
-            jnp.cross(c[..., 1, :], c[..., 2, :]),
-            jnp.cross(c[..., 2, :], c[..., 0, :]),
-            jnp.cross(c[..., 0, :], c[..., 1, :]),
-        ],
-        axis=-2,
-    )  # [H, W, 3 (vertex), 3 (u, v, 1)]
-    # Normalise each pixel's rows by their largest magnitude: the ratios are unchanged and
-    # float32 stays far from overflow for any finite clip coordinates.
-    scale = jnp.max(jnp.abs(rows), axis=(-2, -1), keepdims=True)
-    rows = rows / jnp.where(scale > 0, scale, 1.0)
+    x = [verts[..., i, 0] for i in range(3)]
+    y = [verts[..., i, 1] for i in range(3)]
+    w = [verts[..., i, 3] for i in range(3)]
     px = jnp.arange(width, dtype=jnp.float32)[None, :] + offset_px[0]
     py = jnp.arange(height, dtype=jnp.float32)[:, None] + offset_px[1]
     u = jnp.broadcast_to(px * (2.0 / width) - 1.0, (height, width))
     v = jnp.broadcast_to(1.0 - py * (2.0 / height), (height, width))
-    e = rows[..., 0] * u[..., None] + rows[..., 1] * v[..., None] + rows[..., 2]  # [H, W, 3]
-    s = jnp.sum(e, axis=-1, keepdims=True)
-    ok = covered[..., None] & (s != 0.0)
+    # Rows of the adjugate: row_i = c_j x c_k for (i, j, k) cyclic, c = (x, y, w).
+    ru, rv, r1, e = [], [], [], []
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        a = y[j] * w[k] - w[j] * y[k]
+        b = w[j] * x[k] - x[j] * w[k]
+        c = x[j] * y[k] - y[j] * x[k]
+        ru.append(a)
+        rv.append(b)
+        r1.append(c)
+        e.append(a * u + b * v + c)
+    s = e[0] + e[1] + e[2]
+    ok = covered & (s != 0.0) & jnp.isfinite(s)
     s = jnp.where(ok, s, 1.0)
-    b = e / s
-    db_du = (rows[..., 0] - b * jnp.sum(rows[..., 0], axis=-1, keepdims=True)) / s
-    db_dv = (rows[..., 1] - b * jnp.sum(rows[..., 1], axis=-1, keepdims=True)) / s
+    su, sv = ru[0] + ru[1] + ru[2], rv[0] + rv[1] + rv[2]
+    b = [ei / s for ei in e]
+    dbx = [(ru[i] - b[i] * su) / s * (2.0 / width) for i in range(3)]
+    dby = [(rv[i] - b[i] * sv) / s * (-2.0 / height) for i in range(3)]
     # Clamp into the triangle: a pixel centre can fall a rounding error outside it.
-    bc = jnp.clip(b, 0.0, 1.0)
-    bc = bc / jnp.maximum(jnp.sum(bc, axis=-1, keepdims=True), 1e-30)
-    zero = jnp.zeros_like(b)
-    bary = jnp.where(ok, bc, jnp.where(covered[..., None], 1.0 / 3.0, zero))
-    ddx = jnp.where(ok, db_du * (2.0 / width), zero)
-    ddy = jnp.where(ok, db_dv * (-2.0 / height), zero)
+    bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
+    norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
+    third = jnp.float32(1.0 / 3.0)
+    bary = jnp.stack(
+        [jnp.where(ok, bi / norm, jnp.where(covered, third, 0.0)) for bi in bc], axis=-1
+    )
+    ddx = jnp.stack([jnp.where(ok, d, 0.0) for d in dbx], axis=-1)
+    ddy = jnp.stack([jnp.where(ok, d, 0.0) for d in dby], axis=-1)
     return bary, ddx, ddy
