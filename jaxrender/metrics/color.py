@@ -49,7 +49,8 @@ def _lab_f_diff(u: Array, v: Array, u_minus_v: Array) -> Array:
 
 
 def srgb_to_lab(rgb: Array) -> Array:
-    """CIELab (D65) of sRGB-encoded (..., 3) values, as ``colour.XYZ_to_Lab(colour.sRGB_to_XYZ(.))``."""
+    """CIELab (D65) of sRGB-encoded (..., 3) values, as colour-science's
+    ``XYZ_to_Lab(sRGB_to_XYZ(rgb))``."""
     lin = _srgb_decode(rgb)
     c = [lin[..., i] for i in range(3)]
 
@@ -122,7 +123,8 @@ def ciede2000(lab1: Array, lab2: Array) -> Array:
 @jax.jit
 def _delta_e(a: Array, b: Array):
     def per_chunk(x, y):
-        de = ciede2000(srgb_to_lab(x), srgb_to_lab(y))
+        with jax.named_scope("ciede2000"):
+            de = ciede2000(srgb_to_lab(x), srgb_to_lab(y))
         return spatial_mean(de, 2), de
 
     return map_frames(per_chunk, (a, b), FRAMES_PER_CHUNK)

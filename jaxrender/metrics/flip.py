@@ -204,49 +204,51 @@ def _separable(x: Array, taps_w: Array, taps_h: Array) -> Array:
 # LDR-FLIP on linear [0, 1] inputs.
 
 
-def _ldr_flip_linear(pair: Array, ppd: float) -> Array:
-    """FLIP map (..., H, W) of a stacked (reference, test) pair (2, ..., H, W, 3) of linear RGB
-    images already in [0, 1]."""
-    dt = pair.dtype
-    pair = linear_rgb_to_ycxcz(pair)
-
-    # Colour pipeline.
-    st = jnp.asarray(spatial_taps(ppd), dt)
-    chans = jnp.stack([pair[..., 0], pair[..., 1], pair[..., 2], pair[..., 2]], axis=-1)
+def _colour_difference(ycxcz: Array, ppd: float) -> Array:
+    """Colour pipeline of a (reference, test) pair (2, ..., H, W, 3) in YCxCz -> (..., H, W)."""
+    st = jnp.asarray(spatial_taps(ppd), ycxcz.dtype)
+    chans = jnp.stack([ycxcz[..., 0], ycxcz[..., 1], ycxcz[..., 2], ycxcz[..., 2]], axis=-1)
     f = _separable(chans, st, st)
     filtered = jnp.stack([f[..., 0], f[..., 1], f[..., 2] + f[..., 3]], axis=-1)
-    rgb = jnp.clip(ycxcz_to_linear_rgb(filtered), 0.0, 1.0)
-    lab = linear_rgb_to_lab(rgb)
+    lab = linear_rgb_to_lab(jnp.clip(ycxcz_to_linear_rgb(filtered), 0.0, 1.0))
     # Where both filtered colours are bitwise equal the distance is 0 exactly: XLA may round the
     # two halves of one fused expression differently (an ulp of L is ~1e-5 of FLIP).
-    same_colour = jnp.all(filtered[0] == filtered[1], axis=-1)
-    dist = jnp.where(same_colour, 0.0, jnp.power(_hunt_hyab(lab[0], lab[1]), GQC))
+    same = jnp.all(filtered[0] == filtered[1], axis=-1)
+    dist = jnp.where(same, 0.0, jnp.power(_hunt_hyab(lab[0], lab[1]), GQC))
     cmax = _max_colour_distance()
     pccmax = GPC * cmax
-    colour = jnp.where(
-        dist < pccmax,
-        dist * (GPT / pccmax),
-        GPT + (dist - pccmax) / (cmax - pccmax) * (1.0 - GPT),
-    )
+    return jnp.where(dist < pccmax, dist * (GPT / pccmax),
+                     GPT + (dist - pccmax) / (cmax - pccmax) * (1.0 - GPT))
 
-    # Feature pipeline on Y normalised to [0, 1].
-    ft = jnp.asarray(feature_taps(ppd), dt)  # columns: g, dg, ddg
-    y = (pair[..., 0] * (1.0 / 116.0) + 16.0 / 116.0)[..., None]
-    rw = (ft.shape[0] - 1) // 2
+
+def _feature_difference(ycxcz: Array, ppd: float) -> Array:
+    """Feature (edge and point) pipeline of a pair in YCxCz -> (..., H, W)."""
+    ft = jnp.asarray(feature_taps(ppd), ycxcz.dtype)  # columns: g, dg, ddg
+    y = (ycxcz[..., 0] * (1.0 / 116.0) + 16.0 / 116.0)[..., None]  # Y normalised to [0, 1]
+    r = (ft.shape[0] - 1) // 2
     # Along W: the Gaussian, first and second derivative of each row.
-    yx = correlate_valid(pad_axis(jnp.concatenate([y, y, y], -1), rw, -2, "edge"), ft, -2)
+    yx = correlate_valid(pad_axis(jnp.concatenate([y, y, y], -1), r, -2, "edge"), ft, -2)
     # Along H: Gaussian of (dx, ddx); first and second derivative of the W-Gaussian.
     taps_h = jnp.stack([ft[:, 0], ft[:, 0], ft[:, 1], ft[:, 2]], axis=-1)
     stack_h = jnp.stack([yx[..., 1], yx[..., 2], yx[..., 0], yx[..., 0]], axis=-1)
-    d = correlate_valid(pad_axis(stack_h, rw, -3, "edge"), taps_h, -3)
+    d = correlate_valid(pad_axis(stack_h, r, -3, "edge"), taps_h, -3)
     dx, ddx, dy, ddy = d[..., 0], d[..., 1], d[..., 2], d[..., 3]
     edge = jnp.sqrt(dx * dx + dy * dy)
     point = jnp.sqrt(ddx * ddx + ddy * ddy)
-    same_feature = jnp.all(d[0] == d[1], axis=-1)
-    feat_diff = jnp.where(same_feature, 0.0,
-                          jnp.maximum(jnp.abs(edge[0] - edge[1]), jnp.abs(point[0] - point[1])))
-    feature = jnp.power(feat_diff * (1.0 / math.sqrt(2.0)), GQF)
+    same = jnp.all(d[0] == d[1], axis=-1)
+    diff = jnp.where(same, 0.0,
+                     jnp.maximum(jnp.abs(edge[0] - edge[1]), jnp.abs(point[0] - point[1])))
+    return jnp.power(diff * (1.0 / math.sqrt(2.0)), GQF)
 
+
+def _ldr_flip_linear(pair: Array, ppd: float) -> Array:
+    """FLIP map (..., H, W) of a stacked (reference, test) pair (2, ..., H, W, 3) of linear RGB
+    images already in [0, 1]."""
+    ycxcz = linear_rgb_to_ycxcz(pair)
+    with jax.named_scope("flip_colour"):
+        colour = _colour_difference(ycxcz, ppd)
+    with jax.named_scope("flip_feature"):
+        feature = _feature_difference(ycxcz, ppd)
     return jnp.power(colour, 1.0 - feature)
 
 
@@ -356,7 +358,8 @@ def flip(reference, test, mode: str = "ldr", *, ppd: float = DEFAULT_PPD, srgb: 
         raise ValueError(f"flip: mode must be one of {MODES}, got {mode!r}")
     tonemapper = tonemapper.lower()
     if tonemapper not in TONEMAPPERS:
-        raise ValueError(f"flip: tonemapper must be one of {tuple(TONEMAPPERS)}, got {tonemapper!r}")
+        raise ValueError(
+            f"flip: tonemapper must be one of {tuple(TONEMAPPERS)}, got {tonemapper!r}")
     if not ppd > 0.0:
         raise ValueError(f"flip: ppd must be positive, got {ppd}")
     if start_exposure is not None and stop_exposure is not None and start_exposure > stop_exposure:

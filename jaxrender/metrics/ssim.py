@@ -1,8 +1,8 @@
 """Structural similarity (Wang et al. 2004), equal to ``skimage.metrics.structural_similarity``.
 
 Default (``window="gaussian"``): Gaussian window sigma 1.5 truncated at 3.5 sigma (11 taps),
-population covariance, K1 = 0.01, K2 = 0.03: the paper's MSSIM. ``window="uniform7"``: scikit-image's
-defaults, a 7x7 box with sample covariance (N / (N - 1)). SSIM is computed per channel and then
+population covariance, K1 = 0.01, K2 = 0.03: the paper's MSSIM. ``window="uniform7"``:
+scikit-image's defaults, a 7x7 box with sample covariance (N / (N - 1)). SSIM is computed per channel and then
 averaged; the mean skips a border of (taps - 1) / 2 pixels, as scikit-image crops it. The map
 (``full=True``) is full size with scikit-image's border handling (half-sample symmetric reflection,
 ``scipy.ndimage`` mode "reflect").
@@ -76,7 +76,8 @@ def _ssim(a: Array, b: Array, data_range: Array, window: str, full: bool):
     radius = (window_taps(window)[0].shape[0] - 1) // 2
 
     def per_chunk(x, y):
-        s = _ssim_map(x, y, data_range, window, full)
+        with jax.named_scope(f"ssim_{window}"):
+            s = _ssim_map(x, y, data_range, window, full)
         inner = s[..., radius:-radius, radius:-radius, :] if full else s
         mean = spatial_mean(inner, 3)  # equal-size channels: mean of channel means
         return (mean, s) if full else (mean, None)

@@ -156,7 +156,8 @@ def _reproject_one(depth, cam, prev_cam, prev_depth, width, height, tol):
 
 @partial(jax.jit, static_argnames=("width", "height"))
 def _reproject(depth, cam, prev_cam, prev_depth, width, height, tol):
-    fn = partial(_reproject_one, width=width, height=height, tol=tol)
+    fn = jax.named_scope("reproject")(partial(_reproject_one, width=width, height=height,
+                                              tol=tol))
     for _ in range(depth.ndim - 2):  # leading frame axes: cameras carry the same axes
         fn = jax.vmap(fn)
     return fn(depth, cam, prev_cam, prev_depth)
@@ -226,7 +227,8 @@ def bilinear_sample(image: Array, position: Array) -> Array:
 
 def _sequence_warp_error(x: Array, position: Array, mask: Array):
     """Per-pair sums for one sequence (T, H, W, C): masked squared error and mask count."""
-    warped = jax.vmap(bilinear_sample)(x[:-1], position)  # (T-1, H, W, C)
+    with jax.named_scope("warp"):
+        warped = jax.vmap(bilinear_sample)(x[:-1], position)  # (T-1, H, W, C)
     err = jnp.mean((x[1:] - warped) ** 2, axis=-1)  # (T-1, H, W)
     num = jnp.sum(jnp.sum(jnp.where(mask, err, 0.0), axis=-1), axis=-1)
     den = jnp.sum(jnp.sum(mask.astype(x.dtype), axis=-1), axis=-1)

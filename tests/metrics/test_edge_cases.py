@@ -5,7 +5,11 @@ import flip_evaluator
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
+from skimage.metrics import (
+    mean_squared_error,
+    peak_signal_noise_ratio,
+    structural_similarity,
+)
 
 from jaxrender import metrics
 
