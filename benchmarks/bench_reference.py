@@ -17,8 +17,7 @@ import time
 import jax
 import jax.numpy as jnp
 
-from jaxrender.pipelines.reference import (ReferenceConfig, _ldr_psnr, _program_cfg,
-                                           _render_jit)
+from jaxrender.pipelines.reference import ReferenceConfig, _ldr_psnr, _program_cfg, _render_jit
 from jaxrender.scene import default_camera, list_builtin_scenes, load_scene
 from jaxrender.study.timing import device_info, time_call
 

@@ -68,29 +68,34 @@ class ReferenceConfig(RenderConfig):
 
 
 def _bary_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, w: int, h: int):
-    """Perspective-correct barycentrics and their derivatives per pixel at window points
-    (x, y) float32[N] of triangles int32[N] (the formula of ``raster.resolve``, per point)."""
-    c = clip[faces[tri]]  # [N, 3, 4]
-    c = jnp.stack([c[..., 0], c[..., 1], c[..., 3]], axis=-1)
-    rows = jnp.stack([jnp.cross(c[:, 1], c[:, 2]), jnp.cross(c[:, 2], c[:, 0]),
-                      jnp.cross(c[:, 0], c[:, 1])], axis=-2)
-    scale = jnp.max(jnp.abs(rows), axis=(-2, -1), keepdims=True)
-    rows = rows / jnp.where(scale > 0, scale, 1.0)
+    """Perspective-correct barycentrics float32[N, 3] and their derivatives per pixel at window
+    points (x, y) float32[N] of triangles int32[N]: the algebra of ``raster.resolve``, per
+    point instead of per pixel centre (adjugate rows of the clip-space (x, y, w) columns)."""
+    verts = clip[faces[tri]]  # [N, 3, 4]
+    cx, cy, cw = ([verts[:, i, c] for i in range(3)] for c in (0, 1, 3))
     u = x * (2.0 / w) - 1.0
     v = 1.0 - y * (2.0 / h)
-    e = rows[..., 0] * u[:, None] + rows[..., 1] * v[:, None] + rows[..., 2]
-    s = jnp.sum(e, axis=-1, keepdims=True)
-    ok = s != 0.0
+    ru, rv, e = [], [], []
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        ra = cy[j] * cw[k] - cw[j] * cy[k]
+        rb = cw[j] * cx[k] - cx[j] * cw[k]
+        rc = cx[j] * cy[k] - cy[j] * cx[k]
+        ru.append(ra)
+        rv.append(rb)
+        e.append(ra * u + rb * v + rc)
+    s = e[0] + e[1] + e[2]
+    ok = (s != 0.0) & jnp.isfinite(s)
     s = jnp.where(ok, s, 1.0)
-    b = e / s
-    db_du = (rows[..., 0] - b * jnp.sum(rows[..., 0], axis=-1, keepdims=True)) / s
-    db_dv = (rows[..., 1] - b * jnp.sum(rows[..., 1], axis=-1, keepdims=True)) / s
-    bc = jnp.clip(b, 0.0, 1.0)
-    bc = bc / jnp.maximum(jnp.sum(bc, axis=-1, keepdims=True), 1e-30)
-    third = jnp.full_like(b, 1.0 / 3.0)
-    zero = jnp.zeros_like(b)
-    return (jnp.where(ok, bc, third), jnp.where(ok, db_du * (2.0 / w), zero),
-            jnp.where(ok, db_dv * (-2.0 / h), zero))
+    su, sv = ru[0] + ru[1] + ru[2], rv[0] + rv[1] + rv[2]
+    b = [ei / s for ei in e]
+    bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
+    norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
+    bary = jnp.stack([jnp.where(ok, bi / norm, jnp.float32(1.0 / 3.0)) for bi in bc], axis=-1)
+    ddx = jnp.stack([jnp.where(ok, (ru[i] - b[i] * su) / s * (2.0 / w), 0.0) for i in range(3)], -1)
+    ddy = jnp.stack([jnp.where(ok, (rv[i] - b[i] * sv) / s * (-2.0 / h), 0.0) for i in range(3)],
+                    -1)
+    return bary, ddx, ddy
 
 
 def _visibility(scene: Scene, camera: Camera, clip: Array, offset: Array, cfg, inv_k: Array):

@@ -19,10 +19,10 @@ import pytest
 
 mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 (pip install mitsuba) is a test extra")
 
-from jaxrender.pipelines.reference import ReferenceConfig, render  # noqa: E402
-from jaxrender.scene import Material, Scene, look_at, make_lights  # noqa: E402
-from jaxrender.scene.mesh import box, trs_matrix, uv_sphere  # noqa: E402
-from jaxrender.scene.scene import build_scene  # noqa: E402
+from jaxrender.pipelines.reference import ReferenceConfig, render
+from jaxrender.scene import Material, Scene, look_at, make_lights
+from jaxrender.scene.mesh import box, trs_matrix, uv_sphere
+from jaxrender.scene.scene import build_scene
 
 W, H = 64, 48
 K = 16  # reference samples per pixel side
