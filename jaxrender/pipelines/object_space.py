@@ -1,0 +1,313 @@
+"""Object-space (decoupled, texture-space) shading with visibility-driven shadel allocation, as in
+Oxide Games' Nitrous engine (GDC 2016; Baker and Jarzynski 2022).
+
+  charts (os_charts) -> virtual shade sheets + triangle-id maps (os_sheet), built once on the host
+  visibility buffer -> per-pixel filter taps -> marked 8x8 chunks (os_marking)
+  -> chunks allocated into a fixed store, global MIP bias raised until they fit (os_alloc)
+  -> owned shadels of the allocated chunks shaded through the chunked dispatch
+  -> final pass: every covered pixel samples the store (bilinear / trilinear / anisotropic).
+
+``render(scene, camera, cfg)`` renders one frame from an empty store. ``render_sequence(scene,
+cameras, cfg)`` runs a ``lax.scan`` over a batched camera carrying the store: shading happens
+every ``shade_every``-th frame (the frames between reuse the store and only shade chunks that
+became visible), and with ``reuse`` a chunk resident in the previous frame is copied instead of
+shaded when its inputs did not change (no view-dependent effect, or the eye did not move).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+
+from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow, visibility
+from jaxrender.pipelines.dispatch import shade_pixels
+from jaxrender.pipelines.os_alloc import allocate
+from jaxrender.pipelines.os_marking import footprint, mark_chunks, mark_shadels, taps
+from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
+from jaxrender.pipelines.registry import register
+from jaxrender.shading import shade, surface_points
+from jaxrender.types import Array, Frame, pytree_dataclass
+
+FILTERS = ("bilinear", "trilinear")
+SHADEL_BYTES = 12  # float32 RGB per shadel in the store
+
+
+@dataclass(frozen=True)
+class ObjectSpaceConfig(PipelineConfig):
+    """store_shadels: physical store capacity in shadels (0 = 6 per pixel), rounded up to whole
+    8x8 chunks. mip_bias: the starting global MIP bias; bias_step: how much it is raised per
+    retry when the marked chunks do not fit. filter: "trilinear" or "bilinear"; aniso_taps:
+    taps along the footprint's major axis (1 = isotropic). eps: barycentric clamp
+    [-eps, 1 + eps] for shadels outside their owner triangle (Oxide: 1). sheet_resolution:
+    level-0 shadels per side for every object (0 = per object from texel_density in shadels per
+    world unit and the materials' texture/stripe resolution, capped at max_sheet_resolution).
+    xatlas_resolution, force_xatlas: chart generation. shade_every, reuse: temporal decoupling
+    in render_sequence. wave_size: lanes per wave for the wave counts (a chunk is 64 lanes).
+    """
+
+    store_shadels: int = 0
+    mip_bias: float = 0.0
+    bias_step: float = 0.25
+    filter: str = "trilinear"
+    aniso_taps: int = 1
+    eps: float = 1.0
+    sheet_resolution: int = 0
+    texel_density: float = 128.0
+    max_sheet_resolution: int = 4096
+    xatlas_resolution: int = 1024
+    force_xatlas: bool = False
+    shade_every: int = 1
+    reuse: bool = True
+    wave_size: int = 32
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.filter not in FILTERS:
+            raise ValueError(f"filter must be one of {FILTERS}, got {self.filter!r}")
+        checks = {"store_shadels": self.store_shadels >= 0, "bias_step": self.bias_step > 0,
+                  "aniso_taps": self.aniso_taps >= 1, "eps": self.eps >= 0,
+                  "sheet_resolution": self.sheet_resolution >= 0,
+                  "texel_density": self.texel_density > 0,
+                  "max_sheet_resolution": self.max_sheet_resolution >= CHUNK,
+                  "shade_every": self.shade_every >= 1,
+                  "wave_size": self.wave_size in (32, 64)}
+        for k, ok in checks.items():
+            if not ok:
+                raise ValueError(f"object_space: invalid {k} = {getattr(self, k)!r}")
+
+    @property
+    def store_chunks(self) -> int:
+        shadels = int(self.store_shadels or 6 * self.width * self.height)
+        return max(1, -(-shadels // LANES))
+
+
+@pytree_dataclass
+class StoreState:
+    """The physical store carried between frames: page int32[NC] (slot of each virtual chunk,
+    -1 not resident), colour float32[cap * 64, 3], eye float32[3] of the frame it was shaded."""
+
+    page: Array
+    colour: Array
+    eye: Array
+
+
+def empty_state(sheet: ShadeSheet, cfg: ObjectSpaceConfig) -> StoreState:
+    return StoreState(jnp.full((sheet.n_chunks,), -1, jnp.int32),
+                      jnp.zeros((cfg.store_chunks * LANES, 3), jnp.float32),
+                      jnp.full((3,), jnp.nan, jnp.float32))
+
+
+def prepare(scene, cfg: ObjectSpaceConfig) -> ShadeSheet:
+    """The scene's charts, virtual sheets and triangle-id maps (host, cached)."""
+    return build_sheet(scene, cfg)
+
+
+# ---------------------------------------------------------------- shadel -> surface point
+
+
+def shadel_barycentrics(corner: Array, p: Array, eps: float):
+    """Barycentrics of chart points p float32[N, 2] in chart triangles corner float32[N, 3, 2],
+    clamped to [-eps, 1 + eps] (then shifted to sum to 1), and their d/ds, d/dt."""
+    a, b, c = corner[:, 0], corner[:, 1], corner[:, 2]
+    v0, v1, d = b - a, c - a, p - a
+    det = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
+    ok = jnp.abs(det) > 1e-20
+    inv = jnp.where(ok, 1.0 / jnp.where(ok, det, 1.0), 0.0)
+    b1 = (d[:, 0] * v1[:, 1] - d[:, 1] * v1[:, 0]) * inv
+    b2 = (v0[:, 0] * d[:, 1] - v0[:, 1] * d[:, 0]) * inv
+    bary = jnp.stack([1.0 - b1 - b2, b1, b2], axis=-1)
+    bary = jnp.clip(bary, -eps, 1.0 + eps)
+    bary = bary + (1.0 - jnp.sum(bary, axis=-1, keepdims=True)) / 3.0
+    bary = jnp.where(ok[:, None], bary, jnp.float32(1.0 / 3.0))
+    d1 = jnp.stack([v1[:, 1], -v1[:, 0]], -1) * inv[:, None]  # d b1 / d(s, t)
+    d2 = jnp.stack([-v0[:, 1], v0[:, 0]], -1) * inv[:, None]
+    dst = jnp.stack([-(d1 + d2), d1, d2], axis=1)  # [N, 3, 2]
+    return bary, dst[..., 0], dst[..., 1]
+
+
+def shadel_points(scene, camera, sheet: ShadeSheet, slot_chunk: Array, items: Array, eps: float):
+    """SurfacePoints at the centres of store shadels ``items`` (slot * 64 + lane); the uv
+    derivatives are one shadel step of the shadel's level (the shading rate)."""
+    slot, lane = items // LANES, items % LANES
+    v = jnp.maximum(slot_chunk[slot], 0)
+    tri = sheet.owner[v * LANES + lane]
+    lvl, obj = sheet.chunk_level[v], sheet.chunk_obj[v]
+    rl = jnp.right_shift(sheet.obj_res[obj], lvl).astype(jnp.float32)
+    x = (sheet.chunk_cx[v] * CHUNK + lane % CHUNK).astype(jnp.float32)
+    y = (sheet.chunk_cy[v] * CHUNK + lane // CHUNK).astype(jnp.float32)
+    p = jnp.stack([(x + 0.5) / rl, (y + 0.5) / rl], axis=-1)
+    bary, dbds, dbdt = shadel_barycentrics(sheet.corner_st[jnp.maximum(tri, 0)], p, eps)
+    return surface_points(scene, camera, tri, bary, dbds / rl[:, None], dbdt / rl[:, None])
+
+
+# ---------------------------------------------------------------- one frame
+
+
+def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: StoreState,
+               shade_frame: Array) -> tuple[Frame, StoreState]:
+    """One frame from the store of the previous one. ``shade_frame`` (bool scalar): this is a
+    shading frame; otherwise every resident chunk is reused."""
+    w, h = cfg.width, cfg.height
+    cap = cfg.store_chunks
+    nc = sheet.n_chunks
+    with jax.named_scope("visibility"):
+        vis = visibility(scene, camera, cfg)
+        flat = lambda a: a.reshape((w * h,) + a.shape[2:])  # noqa: E731
+        tri = flat(vis.tri_id)
+        fp = footprint(scene, sheet, tri, flat(vis.bary), flat(vis.dbary_dx), flat(vis.dbary_dy))
+
+    with jax.named_scope("mark_allocate"):
+        al = allocate(fp, sheet, cap, cfg.mip_bias, cfg.bias_step, cfg.filter, cfg.aniso_taps)
+        live = jnp.arange(cap, dtype=jnp.int32) < al.n_alloc  # slots in use
+        v_of_slot = jnp.maximum(al.slot_chunk, 0)
+        owned = (sheet.owner.reshape(nc, LANES) >= 0)  # [NC, 64]
+        owned_slot = owned[v_of_slot] & live[:, None]  # [cap, 64]
+
+    with jax.named_scope("reuse"):
+        view_dependent = bool(scene.effects.specular)
+        same_inputs = jnp.all(state.eye == camera.eye) if view_dependent else jnp.bool_(True)
+        may_reuse = ~shade_frame | (same_inputs & cfg.reuse)
+        prev = state.page[v_of_slot]
+        reused = live & (prev >= 0) & may_reuse  # [cap]
+        src = jnp.maximum(prev, 0)[:, None] * LANES + jnp.arange(LANES, dtype=jnp.int32)[None, :]
+        colour = jnp.where(reused[:, None, None], state.colour[src],
+                           0.0).reshape(cap * LANES, 3)
+
+    with jax.named_scope("shade"):
+        active = (owned_slot & (live & ~reused)[:, None]).reshape(-1)
+        colour, dc = shade_pixels(
+            active, lambda it: shadel_points(scene, camera, sheet, al.slot_chunk, it, cfg.eps),
+            lambda pts: shade(pts, scene), colour, cfg.chunk)
+
+    with jax.named_scope("resolve"):
+        t = al.taps
+        slot = al.page[t.chunk]
+        use = t.weight > 0.0
+        addr = jnp.where(use & (slot >= 0), slot * LANES + t.lane, 0)
+        vals = colour[addr] * jnp.where(use & (slot >= 0), t.weight, 0.0)[..., None]
+        image = jnp.sum(vals, axis=1).reshape(h, w, 3)
+        missing = jnp.sum(use & (slot < 0), dtype=jnp.int32)
+        unowned = jnp.sum(use & (sheet.owner[t.chunk * LANES + t.lane] < 0), dtype=jnp.int32)
+        overflow = al.overflow + vis.counts["overflow"] + (missing > 0).astype(jnp.int32)
+        image = poison_on_overflow(image, overflow)
+
+    with jax.named_scope("counts"):
+        counts, aux = _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing,
+                              unowned, overflow, vis)
+    new_state = StoreState(al.page, colour,
+                           jnp.where(shade_frame, camera.eye, state.eye).astype(jnp.float32))
+    return Frame(image, counts, aux), new_state
+
+
+def _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing, unowned,
+            overflow, vis):
+    w, h = cfg.width, cfg.height
+    nc = sheet.n_chunks
+    t = al.taps
+    covered = jnp.sum(fp.covered, dtype=jnp.int32)
+    needed = mark_shadels(t, nc).reshape(nc, LANES) & owned  # [NC, 64]
+    need_n = jnp.sum(needed, axis=1, dtype=jnp.int32)
+    own_n = jnp.sum(owned, axis=1, dtype=jnp.int32)
+    alloc_shadels = jnp.sum(owned_slot, dtype=jnp.int32)
+    alloc_lanes = al.n_alloc * LANES
+    chunks_shaded = jnp.sum((jnp.arange(owned_slot.shape[0]) < al.n_alloc) & ~reused,
+                            dtype=jnp.int32)
+    inv = dc["invocations"]
+    ws = cfg.wave_size
+    waves = chunks_shaded * (LANES // ws)
+    finest = jnp.sum(mark_chunks(taps(fp, sheet, al.bias, "finest", cfg.aniso_taps), nc),
+                     dtype=jnp.int32)
+    taps_read = jnp.sum(t.weight > 0.0, dtype=jnp.int32)
+    f32 = lambda x: jnp.asarray(x).astype(jnp.float32)  # noqa: E731
+    counts = make_counts(
+        shade_invocations=inv,
+        helper_lanes=chunks_shaded * LANES - inv,
+        covered_pixels=covered,
+        waves=waves,
+        lane_utilization=f32(inv) / jnp.maximum(f32(waves * ws), 1.0),
+        bytes_intermediate=(inv + jnp.sum(reused, dtype=jnp.int32) * LANES + taps_read)
+        * SHADEL_BYTES,
+        shadels_shaded=inv,
+        shadels_allocated=alloc_shadels,
+        shadels_per_pixel=f32(alloc_shadels) / jnp.maximum(f32(covered), 1.0),
+        shadels_needed=jnp.sum(needed, dtype=jnp.int32),
+        chunk_fill=f32(jnp.sum(needed, dtype=jnp.int32)) / jnp.maximum(f32(alloc_lanes), 1.0),
+        chunks_marked=jnp.sum(al.marked, dtype=jnp.int32),
+        chunks_allocated=al.n_alloc,
+        chunks_shaded=chunks_shaded,
+        chunks_reused=jnp.sum(reused, dtype=jnp.int32),
+        store_capacity_shadels=jnp.int32(cfg.store_chunks * LANES),
+        store_bytes=jnp.int32(cfg.store_chunks * LANES * SHADEL_BYTES),
+        store_bytes_used=alloc_lanes * SHADEL_BYTES,
+        mip_bias=al.bias,
+        mip_bias_steps=al.bias_steps,
+        trilinear_overhead=f32(al.n_alloc) / jnp.maximum(f32(finest), 1.0),
+        mip_chain_memory=jnp.float32(sheet.n_chunks / max(sheet.level0_chunks, 1)),
+        missing_taps=missing,
+        unowned_taps=unowned,
+        alpha_invocations=vis.counts["alpha_invocations"],
+        overflow=overflow,
+    )
+    # Oxide's marking view: per pixel, the chunk its heaviest tap reads: 1 hit, 2 fully visible
+    # (every owned shadel of the chunk is needed).
+    k = jnp.argmax(t.weight, axis=1)
+    v = jnp.take_along_axis(t.chunk, k[:, None], axis=1)[:, 0]
+    full = (need_n == own_n) & (own_n > 0)
+    state = jnp.where(fp.covered, jnp.where(full[v], 2, 1), 0).astype(jnp.int32)
+    aux = {"chunk_state": state.reshape(h, w), "mip_level": t.lod.reshape(h, w),
+           "object": jnp.where(fp.covered, fp.obj, -1).reshape(h, w)}
+    return counts, aux
+
+
+# ---------------------------------------------------------------- entry points
+
+
+def _one(scene, sheet, camera, cfg):
+    frame, _ = frame_step(scene, sheet, camera, cfg, empty_state(sheet, cfg), jnp.bool_(True))
+    return frame
+
+
+_one_jit = jax.jit(_one, static_argnums=3)
+
+
+def _raise_on_overflow(frame: Frame, cfg) -> Frame:
+    over = frame.counts["overflow"]
+    if not isinstance(over, jax.core.Tracer) and int(jnp.max(over)) > 0:
+        raise OverflowError(
+            f"object_space: the marked chunks do not fit the store even at the largest MIP "
+            f"bias (or fragments overflowed); raise store_shadels (now {cfg.store_chunks * LANES})")
+    return frame
+
+
+@register("object_space", ObjectSpaceConfig)
+def render(scene, camera, cfg: ObjectSpaceConfig) -> Frame:
+    """Object-space shading: visible 8x8 shadel chunks shaded in texture space, then sampled."""
+    sheet = prepare(scene, cfg)
+    return _raise_on_overflow(_one_jit(scene, sheet, camera, cfg), cfg)
+
+
+def _sequence(scene, sheet, cameras, cfg):
+    def step(carry, cam):
+        state, t = carry
+        frame, state = frame_step(scene, sheet, cam, cfg, state, t % cfg.shade_every == 0)
+        return (state, t + 1), frame
+
+    _, frames = jax.lax.scan(step, (empty_state(sheet, cfg), jnp.int32(0)), cameras)
+    return frames
+
+
+_sequence_jit = jax.jit(_sequence, static_argnums=3)
+
+
+def render_sequence(scene, cameras, cfg: ObjectSpaceConfig) -> Frame:
+    """Frames for a batched camera (leading axis T, e.g. ``camera_path.pan(...).cameras``),
+    carrying the store between frames (temporal decoupling). Image (T, H, W, 3); counts (T,)."""
+    sheet = prepare(scene, cfg)
+    return _raise_on_overflow(_sequence_jit(scene, sheet, cameras, cfg), cfg)
+
+
+__all__ = ["ObjectSpaceConfig", "StoreState", "empty_state", "frame_step", "prepare", "render",
+           "render_sequence", "shadel_barycentrics", "shadel_points"]

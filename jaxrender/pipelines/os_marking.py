@@ -1,0 +1,133 @@
+"""Object-space shading, step 3: which shadels each visible pixel's filter footprint reads.
+
+From the visibility buffer (so occluded surfaces mark nothing), each covered pixel's chart
+coordinates and their screen derivatives give a MIP level per object (GL's LOD rule in the
+object's level-0 shadels, plus a global bias); the filter taps there are the same ones the final
+pass reads: 2x2 bilinear texels at one level (``bilinear``) or at two (``trilinear``), at
+``aniso_taps`` positions along the footprint's major axis. LOD and filter fractions are
+quantised to 1/256 as texture hardware does (8-bit fractions), so exact cases stay exact: a tap
+whose weight rounds to 0 is neither marked nor read.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+
+from jaxrender.pipelines.os_sheet import CHUNK, ShadeSheet
+from jaxrender.types import Array
+
+FRACTION = 256.0  # 8-bit LOD and bilinear fractions
+
+
+class Taps(NamedTuple):
+    """Per pixel P and tap K: virtual chunk int32[P, K], lane int32[P, K], weight float32[P, K]
+    (0 for empty pixels and unused taps); lod float32[P] (selected, biased; -1 empty)."""
+
+    chunk: Array
+    lane: Array
+    weight: Array
+    lod: Array
+
+
+class Footprint(NamedTuple):
+    """Per pixel: object int32[P], chart point st float32[P, 2], footprint axes in chart units
+    dst_dx, dst_dy float32[P, 2], covered bool[P]."""
+
+    obj: Array
+    st: Array
+    dst_dx: Array
+    dst_dy: Array
+    covered: Array
+
+
+def footprint(scene, sheet: ShadeSheet, tri: Array, bary: Array, dbx: Array, dby: Array
+              ) -> Footprint:
+    """Chart coordinates of flat pixels from their triangle and barycentrics (and derivatives)."""
+    covered = tri >= 0
+    t = jnp.maximum(tri, 0)
+    c = sheet.corner_st[t]  # [P, 3, 2]
+    st = jnp.sum(bary[:, :, None] * c, axis=1)
+    dx = jnp.sum(dbx[:, :, None] * c, axis=1)
+    dy = jnp.sum(dby[:, :, None] * c, axis=1)
+    return Footprint(scene.tri_object[t], st, dx, dy, covered)
+
+
+def _q(x: Array) -> Array:
+    return jnp.round(x * FRACTION) / FRACTION
+
+
+def raw_lod(fp: Footprint, sheet: ShadeSheet, aniso_taps: int):
+    """Unbiased, unclamped LOD float32[P] in the object's level-0 shadels, the major footprint
+    axis float32[P, 2] (chart units) and the top level float32[P] of each pixel's object."""
+    res = sheet.obj_res[fp.obj]
+    rf = res.astype(jnp.float32)
+    lx = jnp.sqrt(jnp.sum(jnp.square(fp.dst_dx), axis=-1)) * rf
+    ly = jnp.sqrt(jnp.sum(jnp.square(fp.dst_dy), axis=-1)) * rf
+    major, minor = jnp.maximum(lx, ly), jnp.minimum(lx, ly)
+    n = int(aniso_taps)
+    size = major if n == 1 else jnp.maximum(minor, major / n)
+    lod = jnp.log2(jnp.maximum(size, 1e-20))
+    axis = jnp.where((lx >= ly)[:, None], fp.dst_dx, fp.dst_dy)
+    top = (sheet.obj_levels[fp.obj] - 1).astype(jnp.float32)
+    return jnp.where(jnp.isfinite(lod), lod, 0.0), axis, top
+
+
+def taps(fp: Footprint, sheet: ShadeSheet, bias: Array, mode: str, aniso_taps: int) -> Taps:
+    """The filter taps of every pixel at MIP bias ``bias`` (float32 scalar, traced). mode:
+    "trilinear" (two levels), "bilinear" (the nearest level) or "finest" (the finer of the two
+    trilinear levels alone, to measure what the second level costs)."""
+    res = sheet.obj_res[fp.obj]
+    nl = sheet.obj_levels[fp.obj]
+    n = int(aniso_taps)
+    lod, axis, top = raw_lod(fp, sheet, n)
+    lod = jnp.clip(_q(lod + bias), 0.0, top)
+    if mode == "trilinear":
+        l0f = jnp.floor(lod)
+        frac = lod - l0f
+        l0 = l0f.astype(jnp.int32)
+        levels = [(l0, 1.0 - frac), (jnp.minimum(l0 + 1, nl - 1), frac)]
+    elif mode == "finest":
+        levels = [(jnp.floor(lod).astype(jnp.int32), jnp.ones_like(lod))]
+    else:
+        levels = [(jnp.floor(lod + 0.5).astype(jnp.int32), jnp.ones_like(lod))]
+    chunks, lanes, weights = [], [], []
+    for lv, wl in levels:
+        rl = jnp.right_shift(res, lv)
+        rlf = rl.astype(jnp.float32)
+        cps = rl // CHUNK
+        base = sheet.obj_base[fp.obj, lv]
+        for i in range(n):
+            off = (i + 0.5) / n - 0.5
+            p = fp.st + axis * off if n > 1 else fp.st
+            tx = p[:, 0] * rlf - 0.5
+            ty = p[:, 1] * rlf - 0.5
+            x0f, y0f = jnp.floor(tx), jnp.floor(ty)
+            fx, fy = _q(tx - x0f), _q(ty - y0f)
+            hi = (rl - 1).astype(jnp.float32)
+            for dy, wy in ((0, 1.0 - fy), (1, fy)):
+                for dx, wx in ((0, 1.0 - fx), (1, fx)):
+                    x = jnp.clip(x0f + dx, 0.0, hi).astype(jnp.int32)
+                    y = jnp.clip(y0f + dy, 0.0, hi).astype(jnp.int32)
+                    chunks.append(base + (y // CHUNK) * cps + x // CHUNK)
+                    lanes.append((y % CHUNK) * CHUNK + x % CHUNK)
+                    weights.append(wl * wx * wy / n)
+    stack = lambda xs: jnp.stack(xs, axis=-1)  # noqa: E731
+    w = jnp.where(fp.covered[:, None], stack(weights), 0.0)
+    chunk = jnp.where(w > 0.0, stack(chunks), 0)
+    lane = jnp.where(w > 0.0, stack(lanes), 0)
+    return Taps(chunk, lane, w, jnp.where(fp.covered, lod, -1.0))
+
+
+def mark_chunks(t: Taps, n_chunks: int) -> Array:
+    """bool[NC]: the virtual chunks some tap with non-zero weight reads."""
+    idx = jnp.where(t.weight > 0.0, t.chunk, n_chunks).reshape(-1)
+    return jnp.zeros((n_chunks,), bool).at[idx].set(True, mode="drop")
+
+
+def mark_shadels(t: Taps, n_chunks: int) -> Array:
+    """bool[NC * 64]: the virtual shadels some tap with non-zero weight reads."""
+    n = n_chunks * CHUNK * CHUNK
+    idx = jnp.where(t.weight > 0.0, t.chunk * (CHUNK * CHUNK) + t.lane, n).reshape(-1)
+    return jnp.zeros((n,), bool).at[idx].set(True, mode="drop")

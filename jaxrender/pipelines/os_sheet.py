@@ -1,0 +1,239 @@
+"""Object-space shading, step 2: the virtual shade sheet of every object and its triangle-id map.
+
+Each object has a square power-of-two sheet (``res`` shadels a side) with a MIP chain down to one
+8x8 chunk. The virtual address space enumerates every chunk of every level of every object:
+virtual chunk id = ``obj_base[o, l] + cy * (res_l / 8) + cx``; shadel ``(x, y)`` of a chunk is
+lane ``(y % 8) * 8 + x % 8``. Nothing is stored per virtual chunk but its static description
+and the triangle that owns each shadel; colours live in the physical store (os_alloc).
+
+The triangle-id map is rasterized in chart (s, t) space at every level with the shared
+rasterizer's rules (``raster_st``: 8-bit snapping, exact integer edge functions, top-left rule;
+a NumPy loop because the map is built once per mesh on the host and the jitted rasterizer would
+compile once per level size; a test checks it against ``rasterize_clip``): first normally
+(texel centres), then conservatively (every texel whose square the triangle touches, into the
+texels still empty), then one ring of gutter dilation (so every bilinear tap next to a chart edge
+has an owner), and finally every triangle that still owns no shadel claims the texel under its
+chart centroid (when that texel's owner keeps another one). At level 0 every triangle then owns
+at least one shadel (a triangle of zero chart area included).
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.pipelines.os_charts import _tri_area2, object_charts, scene_key
+from jaxrender.types import Array, pytree_dataclass, static_field
+
+CHUNK = 8  # shadels per chunk side
+LANES = CHUNK * CHUNK
+MIN_RES = CHUNK
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_SIZE = 8
+
+
+@pytree_dataclass
+class ShadeSheet:
+    """The static virtual shade sheets of a scene (arrays are device arrays, shapes static).
+
+    corner_st float32[T, 3, 2]: chart coordinates of each triangle corner.
+    owner int32[NC * 64]: owning triangle of each virtual shadel (-1: none).
+    chunk_obj, chunk_level, chunk_cx, chunk_cy int32[NC]: what each virtual chunk is.
+    obj_res int32[O]: level-0 shadels per side; obj_levels int32[O]; obj_base int32[O, L].
+    n_chunks, max_levels: static sizes; sources: "own"/"xatlas" per object; level0_shadels.
+    """
+
+    corner_st: Array
+    owner: Array
+    chunk_obj: Array
+    chunk_level: Array
+    chunk_cx: Array
+    chunk_cy: Array
+    obj_res: Array
+    obj_levels: Array
+    obj_base: Array
+    n_chunks: int = static_field(default=0)
+    max_levels: int = static_field(default=1)
+    level0_chunks: int = static_field(default=0)
+    sources: tuple = static_field(default=())
+
+
+def levels_of(res: int) -> int:
+    """MIP levels from ``res`` down to one chunk (res >= 8, a power of two)."""
+    return int(np.log2(res // CHUNK)) + 1
+
+
+def _pow2(x: float, lo: int, hi: int) -> int:
+    r = 1 << int(np.ceil(np.log2(max(x, 1.0))))
+    return int(min(max(r, lo), hi))
+
+
+def object_resolution(scene, chart, cfg) -> int:
+    """Level-0 shadels per side: ``cfg.sheet_resolution`` if set, else the larger of the
+    texel density (``texel_density`` shadels per world unit over the chart's fill) and the
+    materials' own frequency (texture or stripe resolution times the uv extent)."""
+    hi = int(cfg.max_sheet_resolution)
+    if cfg.sheet_resolution:
+        return _pow2(cfg.sheet_resolution, MIN_RES, hi)
+    pos = np.asarray(scene.positions, np.float64)
+    f = np.asarray(scene.faces)[chart.tris]
+    world = 0.5 * float(_tri_area2(pos[f]).sum())
+    fill = max(0.5 * float(_tri_area2(chart.corner_st).sum()), 1e-6)
+    want = cfg.texel_density * np.sqrt(world / fill)
+    mats = np.unique(np.asarray(scene.tri_material)[chart.tris])
+    m = scene.materials
+    ext = chart.uv_extent if chart.source == "own" else 1.0
+    for k in mats:
+        if scene.effects.procedural and int(np.asarray(m.procedural)[k]) != 0:
+            want = max(want, float(np.asarray(m.stripe_resolution)[k]) * ext)
+        if scene.effects.textures and int(np.asarray(m.texture)[k]) >= 0:
+            want = max(want, float(scene.textures.resolution) * ext)
+    return _pow2(want, MIN_RES, hi)
+
+
+SUBPIXEL = 256  # 8-bit sub-texel snapping, as the shared rasterizer
+
+
+def _snap(st: np.ndarray, res: int) -> np.ndarray:
+    """Chart coordinates [T, 3, 2] -> fixed-point texel coordinates int64 (x right, y down)."""
+    return np.round(st * (res * SUBPIXEL)).astype(np.int64)
+
+
+def raster_st(st: np.ndarray, res: int, conservative: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Rasterize chart triangles st[T, 3, 2] onto a res x res texel grid with the shared
+    rasterizer's rules (8-bit snapping, exact integer edge functions, top-left fill rule, ties
+    to the lowest triangle index). ``conservative``: a texel is covered when its square
+    overlaps the triangle at all (edge functions at the square's most inside corner, plus the
+    bounding box: the separating-axis test). Returns (owner int64[res, res] lowest covering
+    triangle or -1, hits int32[res, res] covering triangles per texel)."""
+    v = _snap(st, res)
+    owner = np.full((res, res), -1, np.int64)
+    hits = np.zeros((res, res), np.int32)
+    half = SUBPIXEL // 2
+    for k in range(v.shape[0]):
+        xs, ys = v[k, :, 0], v[k, :, 1]
+        area2 = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (ys[1] - ys[0]) * (xs[2] - xs[0])
+        if area2 == 0:
+            continue
+        sign = -1 if area2 < 0 else 1
+        pad = half if conservative else 0
+        lo_x = max(int(-((half + pad - xs.min()) // SUBPIXEL)), 0)
+        hi_x = min(int((xs.max() + pad - half) // SUBPIXEL), res - 1)
+        lo_y = max(int(-((half + pad - ys.min()) // SUBPIXEL)), 0)
+        hi_y = min(int((ys.max() + pad - half) // SUBPIXEL), res - 1)
+        if lo_x > hi_x or lo_y > hi_y:
+            continue
+        py, px = np.mgrid[lo_y:hi_y + 1, lo_x:hi_x + 1]
+        sx, sy = px * SUBPIXEL + half, py * SUBPIXEL + half
+        inside = np.ones(px.shape, bool)
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            dx, dy = (xs[b] - xs[a]) * sign, (ys[b] - ys[a]) * sign
+            e = dx * (sy - ys[a]) - dy * (sx - xs[a])
+            if conservative:
+                inside &= e + (abs(dx) + abs(dy)) * half >= 0
+            else:
+                top_left = dy < 0 or (dy == 0 and dx > 0)
+                inside &= (e > 0) | ((e == 0) & top_left)
+        yy, xx = py[inside], px[inside]
+        hits[yy, xx] += 1
+        free = owner[yy, xx] < 0
+        owner[yy[free], xx[free]] = k
+    return owner, hits
+
+
+def _raster_owner(st: np.ndarray, res: int) -> np.ndarray:
+    """Owner map int64[res, res] (local triangle index, -1 none): texel centres, then the
+    conservative pass into the texels still empty, then one ring of gutter dilation."""
+    own, _ = raster_st(st, res)
+    cons, _ = raster_st(st, res, conservative=True)
+    own = np.where(own < 0, cons, own)
+    pad = np.pad(own, 1, constant_values=-1)
+    dil = own.copy()
+    for dy, dx in ((0, -1), (0, 1), (-1, 0), (1, 0), (-1, -1), (-1, 1), (1, -1), (1, 1)):
+        nb = pad[1 + dy:1 + dy + res, 1 + dx:1 + dx + res]
+        dil = np.where(dil < 0, nb, dil)
+    return dil
+
+
+def _claim_orphans(own: np.ndarray, st: np.ndarray, res: int) -> np.ndarray:
+    """Every triangle owning no texel takes the texel under its centroid (or a corner) when the
+    texel's owner keeps at least one other texel."""
+    t = st.shape[0]
+    counts = np.bincount(own[own >= 0], minlength=t)
+    for k in np.nonzero(counts == 0)[0]:
+        for p in (st[k].mean(0), *st[k]):
+            x, y = (np.clip(np.floor(p * res), 0, res - 1)).astype(np.int64)
+            prev = own[y, x]
+            if prev < 0 or counts[prev] > 1:
+                if prev >= 0:
+                    counts[prev] -= 1
+                own[y, x] = k
+                counts[k] += 1
+                break
+    return own
+
+
+def _to_chunks(m: np.ndarray) -> np.ndarray:
+    """[res, res] -> chunk-major flat [(res/8)^2 * 64]."""
+    r = m.shape[0]
+    c = r // CHUNK
+    return m.reshape(c, CHUNK, c, CHUNK).transpose(0, 2, 1, 3).reshape(-1)
+
+
+def build_sheet(scene, cfg) -> ShadeSheet:
+    """The virtual sheets of ``scene`` (host-side, cached by mesh content and sheet settings)."""
+    if isinstance(scene.positions, jax.core.Tracer):
+        raise TypeError("object_space: the shade sheet is built on the host from a concrete "
+                        "scene; call object_space.prepare(scene, cfg) outside jit")
+    key = scene_key(scene, "sheet", cfg.sheet_resolution, cfg.texel_density,
+                    cfg.max_sheet_resolution, cfg.xatlas_resolution, cfg.force_xatlas,
+                    scene.effects.procedural, scene.effects.textures)
+    if key in _CACHE:
+        _CACHE.move_to_end(key)
+        return _CACHE[key]
+    charts = object_charts(scene, cfg.xatlas_resolution, cfg.force_xatlas)
+    n_tri = int(np.asarray(scene.faces).shape[0])
+    corner = np.zeros((n_tri, 3, 2), np.float64)
+    res = [object_resolution(scene, ch, cfg) for ch in charts]
+    levels = [levels_of(r) for r in res]
+    max_l = max(levels, default=1)
+    base = np.zeros((len(charts), max_l), np.int64)
+    owners, c_obj, c_lvl, c_x, c_y = [], [], [], [], []
+    n = 0
+    for o, (ch, r, nl) in enumerate(zip(charts, res, levels)):
+        corner[ch.tris] = ch.corner_st
+        for lv in range(nl):
+            rl = r >> lv
+            cps = rl // CHUNK
+            base[o, lv] = n
+            if ch.tris.size:
+                own = _claim_orphans(_raster_owner(ch.corner_st, rl), ch.corner_st, rl)
+                own = np.where(own >= 0, ch.tris[np.maximum(own, 0)], -1)
+            else:
+                own = np.full((rl, rl), -1, np.int64)
+            owners.append(_to_chunks(own))
+            cy, cx = np.divmod(np.arange(cps * cps), cps)
+            c_obj.append(np.full(cps * cps, o))
+            c_lvl.append(np.full(cps * cps, lv))
+            c_x.append(cx)
+            c_y.append(cy)
+            n += cps * cps
+        for lv in range(nl, max_l):
+            base[o, lv] = base[o, nl - 1]
+    i32 = lambda a: jnp.asarray(np.asarray(a, np.int32))  # noqa: E731
+    cat = lambda xs: i32(np.concatenate(xs) if xs else np.zeros(0))  # noqa: E731
+    level0 = sum((r // CHUNK) ** 2 for r in res)
+    sheet = ShadeSheet(
+        corner_st=jnp.asarray(corner.astype(np.float32)), owner=cat(owners), chunk_obj=cat(c_obj),
+        chunk_level=cat(c_lvl), chunk_cx=cat(c_x), chunk_cy=cat(c_y), obj_res=i32(res),
+        obj_levels=i32(levels), obj_base=i32(base), n_chunks=int(n), max_levels=int(max_l),
+        level0_chunks=int(level0), sources=tuple(ch.source for ch in charts))
+    _CACHE[key] = sheet
+    while len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return sheet
