@@ -1,0 +1,115 @@
+"""``jaxrender bench``: rasterizer throughput, pipeline frame times, metric times, compile times
+and peak device memory, printed as markdown tables and written as JSON.
+
+    jaxrender bench --quick                    # a minute on a laptop CPU
+    jaxrender bench --json bench.json          # the issue-11 sweeps (for the GPU)
+    python -m jaxrender.bench --sections raster --json raster.json
+
+The raster sweeps use the terrain of ``benchmarks/bench_raster.py`` (same mesh and camera);
+pipelines run on every built-in scene from its default camera; every row carries its compile
+time apart from its steady-state median. This module imports nothing heavy until ``run``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+SECTIONS = ("raster", "pipelines", "metrics")
+
+
+def _res(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+        if w > 0 and h > 0:
+            return w, h
+    except ValueError:
+        pass
+    raise argparse.ArgumentTypeError(f"expected WxH, e.g. 1920x1080, got {text!r}")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    p.add_argument("--quick", action="store_true",
+                   help="small sizes (a CPU smoke run) instead of the issue-11 sweeps")
+    p.add_argument("--json", metavar="PATH", help="write every row and the environment here")
+    p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS))
+    p.add_argument("--resolution", type=_res, help="pipelines: WxH (default 1920x1080, "
+                   "quick 160x90)")
+    p.add_argument("--scenes", nargs="+", metavar="SCENE",
+                   help="pipelines: scenes as name or name:key=value,... (default: all built-ins "
+                        "plus many_small:n_triangles=100000; quick: terrain)")
+    p.add_argument("--pipelines", nargs="+", metavar="PIPELINE",
+                   help="pipelines: names or name:key=value,... (default: every registered one)")
+    p.add_argument("--repeats", type=int, help="timed repeats per row (default 10, quick 3)")
+    p.add_argument("--budget", type=float, default=0.0, metavar="SECONDS",
+                   help="stop starting new pipeline rows after this long (0: no limit)")
+    p.add_argument("--metric-frames", type=int, help="metrics: batch size (default 60, quick 2)")
+    return p
+
+
+def run(a: argparse.Namespace) -> int:
+    import sys
+    import time
+
+    from jaxrender.bench import timing
+
+    t_start = time.monotonic()
+    env = timing.environment()
+    print(f"# jaxrender bench\n\n{env}\n", flush=True)
+    repeats = a.repeats or (3 if a.quick else 10)
+    out = {"environment": env, "quick": bool(a.quick), "sections": {}, "memory": {}}
+
+    def section(name, rows, columns):
+        print(f"\n## {name}\n", flush=True)
+        print("| " + " | ".join(columns) + " |\n|" + "|".join("---" for _ in columns) + "|",
+              flush=True)
+        kept = []
+        for row in rows:
+            kept.append(row)
+            print("| " + " | ".join(timing.fmt(row.get(c)) for c in columns) + " |", flush=True)
+            timing.dump(a.json, out | {"sections": out["sections"] | {name: kept}})
+        out["sections"][name] = kept
+        out["memory"][name] = timing.peak_memory()
+        print(f"\npeak device memory after {name}: {out['memory'][name]}", flush=True)
+
+    if "raster" in a.sections:
+        from jaxrender.bench import raster
+
+        sizes = raster.QUICK if a.quick else raster.TRIANGLE_SWEEP + raster.RESOLUTION_SWEEP
+
+        def raster_rows():
+            for n, w, h in sizes:
+                try:
+                    yield raster.time_raster(n, w, h, repeats)
+                except Exception as e:  # noqa: BLE001 - e.g. out of memory at 4K x 2.6M
+                    yield dict(resolution=f"{w}x{h}", triangles=n,
+                               skipped=f"{type(e).__name__}: {e}"[:200])
+
+        section("raster", raster_rows(), raster.COLUMNS + ["skipped"])
+
+    if "pipelines" in a.sections:
+        from jaxrender.bench import pipelines
+
+        w, h = a.resolution or ((160, 90) if a.quick else (1920, 1080))
+        scenes = a.scenes or (["terrain"] if a.quick else pipelines.default_scene_specs())
+        pipes = a.pipelines or pipelines.default_pipeline_specs()
+        deadline = t_start + a.budget if a.budget > 0 else None
+        section("pipelines", pipelines.time_pipelines(scenes, pipes, w, h, repeats=repeats,
+                                                      deadline=deadline), pipelines.COLUMNS)
+
+    if "metrics" in a.sections:
+        from jaxrender.bench import metrics
+
+        w, h = (320, 180) if a.quick else (1920, 1080)
+        frames = a.metric_frames or (2 if a.quick else 60)
+        section("metrics", metrics.time_metrics(w, h, frames, repeats), metrics.COLUMNS)
+
+    out["total_s"] = time.monotonic() - t_start
+    timing.dump(a.json, out)
+    print(f"\ntotal {out['total_s']:.1f} s" + (f"; wrote {a.json}" if a.json else ""))
+    sys.stdout.flush()
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="jaxrender bench", description=__doc__.splitlines()[0])
+    return run(add_arguments(p).parse_args(argv))

@@ -1,0 +1,3 @@
+from jaxrender.bench import main
+
+raise SystemExit(main())

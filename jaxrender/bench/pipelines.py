@@ -1,0 +1,91 @@
+"""Each registered pipeline's frame time on each built-in scene (compile apart), with the
+shading counts beside it. A (scene, pipeline) that fails is kept as a row with its reason."""
+
+from __future__ import annotations
+
+import time
+import tomllib
+
+from jaxrender.bench.timing import time_first_call
+
+# Scenes as "name" or "name:key=value,key=value" (TOML values); a 100k-triangle scene for the
+# issue-11 targets follows the built-ins.
+EXTRA_SCENES = ["many_small:n_triangles=100000"]
+COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "overflow")
+
+
+def parse_spec(text: str) -> tuple[str, dict]:
+    """'name:k=v,k=v' -> (name, {k: v}) with TOML values; bare words are strings."""
+    name, _, rest = text.partition(":")
+    params = {}
+    for item in filter(None, rest.split(",")):
+        k, _, v = item.partition("=")
+        try:
+            params[k.strip()] = tomllib.loads(f"v = {v}")["v"]
+        except tomllib.TOMLDecodeError:
+            params[k.strip()] = v.strip()
+    return name.strip(), params
+
+
+def default_scene_specs() -> list[str]:
+    from jaxrender.scene import list_builtin_scenes
+
+    first = ["terrain", "room", "foliage"]  # the ones the studies use, timed first
+    names = [n for n, _ in list_builtin_scenes()]
+    return [n for n in first if n in names] + [n for n in names if n not in first] + EXTRA_SCENES
+
+
+def default_pipeline_specs() -> list[str]:
+    from jaxrender.pipelines import list_pipelines
+
+    return [p.name for p in list_pipelines()]
+
+
+def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repeats: int = 5,
+                   deadline: float | None = None, log=print):
+    """Yield one row per (scene, pipeline); rows past ``deadline`` (time.monotonic) are skipped."""
+    from jaxrender.pipelines import get_pipeline, make_config
+    from jaxrender.scene import default_camera, load_scene
+    from jaxrender.study.timing import compile_render
+
+    for scene_spec in scene_specs:
+        base = dict(scene=scene_spec, resolution=f"{width}x{height}")
+        if deadline is not None and time.monotonic() > deadline:
+            yield dict(base, skipped="time budget spent")
+            continue
+        try:
+            name, params = parse_spec(scene_spec)
+            t0 = time.perf_counter()
+            scene = load_scene(name, **params)
+            camera = default_camera(scene)
+            base["load_s"] = time.perf_counter() - t0
+            base["scene_triangles"] = int(scene.faces.shape[0]) if hasattr(scene, "faces") else None
+        except Exception as e:  # noqa: BLE001 - a benchmark reports and goes on
+            yield dict(base, skipped=f"scene: {type(e).__name__}: {e}"[:200])
+            continue
+        for pipe_spec in pipeline_specs:
+            row = dict(base, pipeline=pipe_spec)
+            if deadline is not None and time.monotonic() > deadline:
+                yield dict(row, skipped="time budget spent")
+                continue
+            try:
+                pname, pparams = parse_spec(pipe_spec)
+                pipe = get_pipeline(pname)
+                cfg = make_config(pname, width=width, height=height, **pparams)
+                comp = compile_render(pipe.render, scene, camera, cfg)
+                r = time_first_call(lambda: comp.call(scene, camera), repeats)
+                frame = r.pop("out")
+                if comp.method == "aot":
+                    r["compile_s"] = comp.compile_ms / 1e3
+                row.update(r, compile_method=comp.method)
+                counts = getattr(frame, "counts", None) or {}
+                for k in COUNT_COLUMNS:
+                    if k in counts:
+                        row[k] = float(counts[k])
+            except Exception as e:  # noqa: BLE001
+                row["skipped"] = f"{type(e).__name__}: {e}"[:200]
+            yield row
+
+
+COLUMNS = ["scene", "pipeline", "resolution", "median_ms", "min_ms", "compile_s",
+           "compile_method", "shade_invocations", "overshading", "skipped"]
