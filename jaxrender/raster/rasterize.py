@@ -202,10 +202,11 @@ def _check_mesh(verts, faces, what: str, dim: int) -> None:
         raise ValueError(f"rasterize: faces must have shape (T, 3), got {fshape}")
     if vshape[0] == 0 or fshape[0] == 0:
         raise ValueError(f"rasterize: empty mesh ({vshape[0]} vertices, {fshape[0]} faces)")
-    fdtype = np.dtype(getattr(faces, "dtype", np.asarray(faces).dtype))
+    fdtype = np.dtype(faces.dtype if hasattr(faces, "dtype") else np.asarray(faces).dtype)
     if not np.issubdtype(fdtype, np.integer):
         raise TypeError(f"rasterize: faces must be integers, got dtype {fdtype}")
-    if not np.issubdtype(np.dtype(getattr(verts, "dtype", np.float32)), np.floating):
+    vdtype = np.dtype(verts.dtype if hasattr(verts, "dtype") else np.asarray(verts).dtype)
+    if not np.issubdtype(vdtype, np.floating):
         raise TypeError(f"rasterize: {what} must be floating point")
     if fshape[0] >= 2**31 - 1:
         raise ValueError("rasterize: too many triangles for 32-bit ids")
