@@ -58,7 +58,7 @@ def own_uvs_unique(corner_st: np.ndarray, world_area2: np.ndarray) -> bool:
     scale = max(float(np.max(world_area2, initial=0.0)), 1e-30)
     if np.any((uv_area2 <= 1e-12) & (world_area2 > 1e-9 * scale)):
         return False
-    if uv_area2.sum() > 1.0 + 1e-6:  # more uv area than the unit square: overlap for sure
+    if 0.5 * uv_area2.sum() > 1.0 + 1e-6:  # more uv area than the unit square: overlap for sure
         return False
     from jaxrender.pipelines.os_sheet import raster_st
 

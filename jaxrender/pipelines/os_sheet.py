@@ -72,9 +72,10 @@ def _pow2(x: float, lo: int, hi: int) -> int:
 
 
 def object_resolution(scene, chart, cfg) -> int:
-    """Level-0 shadels per side: ``cfg.sheet_resolution`` if set, else the larger of the
-    texel density (``texel_density`` shadels per world unit over the chart's fill) and the
-    materials' own frequency (texture or stripe resolution times the uv extent)."""
+    """Level-0 shadels per side: ``cfg.sheet_resolution`` if set; else the materials' own
+    frequency (texture or stripe resolution times the uv extent, so shadels align with texels)
+    when the object has one, otherwise ``texel_density`` shadels per world unit over the
+    chart's fill. A power of two in [8, max_sheet_resolution]."""
     hi = int(cfg.max_sheet_resolution)
     if cfg.sheet_resolution:
         return _pow2(cfg.sheet_resolution, MIN_RES, hi)
@@ -82,15 +83,17 @@ def object_resolution(scene, chart, cfg) -> int:
     f = np.asarray(scene.faces)[chart.tris]
     world = 0.5 * float(_tri_area2(pos[f]).sum())
     fill = max(0.5 * float(_tri_area2(chart.corner_st).sum()), 1e-6)
-    want = cfg.texel_density * np.sqrt(world / fill)
+    density = cfg.texel_density * np.sqrt(world / fill)
     mats = np.unique(np.asarray(scene.tri_material)[chart.tris])
     m = scene.materials
     ext = chart.uv_extent if chart.source == "own" else 1.0
+    natural = 0.0
     for k in mats:
         if scene.effects.procedural and int(np.asarray(m.procedural)[k]) != 0:
-            want = max(want, float(np.asarray(m.stripe_resolution)[k]) * ext)
+            natural = max(natural, float(np.asarray(m.stripe_resolution)[k]) * ext)
         if scene.effects.textures and int(np.asarray(m.texture)[k]) >= 0:
-            want = max(want, float(scene.textures.resolution) * ext)
+            natural = max(natural, float(scene.textures.resolution) * ext)
+    want = natural if natural > 0 else density
     return _pow2(want, MIN_RES, hi)
 
 
