@@ -18,3 +18,4 @@ from jaxrender.pipelines import deferred  # noqa: E402,F401
 from jaxrender.pipelines import visbuffer  # noqa: E402,F401
 from jaxrender.pipelines import dacs  # noqa: E402,F401
 from jaxrender.pipelines import checkerboard  # noqa: E402,F401
+from jaxrender.pipelines import object_space  # noqa: E402,F401
