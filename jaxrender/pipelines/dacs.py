@@ -12,9 +12,12 @@ dispatch, so the compiled program evaluates the shader only for them. The decisi
 ``dacs_warp``'s simulation of the paper's SEARCH/SHADE warp scheme.
 
 Borders: parents outside the image are left out of the test and of the average. The average
-uses opposite parent pairs that lie wholly inside (so a linear ramp is still reproduced
-exactly at a border), else the parents that are inside; every pixel beyond level 0 has at
-least one parent inside, so no size (odd or 1 pixel wide) gives a NaN.
+is over the opposite parent pairs that lie wholly inside the image, so a linear ramp is
+reproduced exactly wherever such a pair exists (every pixel when W and H are 1 mod s). A pixel
+with no complete pair inside (the last columns or rows of a partial block) takes the mean of
+its parents inside (``border="average"``, the default: 1/16 of a 4k x 4k flat image is
+shaded) or is always shaded (``border="shade"``: exact for a ramp at any size). Every pixel
+beyond level 0 has a parent inside, so no size, odd or 1 pixel wide, gives a NaN.
 
 The threshold is traced: ``render_threshold(scene, camera, threshold, cfg)`` sweeps it without
 recompiling; the registered ``render`` calls it with ``cfg.threshold``.
@@ -23,24 +26,30 @@ recompiling; the registered ``render`` calls it with ``cfg.threshold``.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.pipelines import dacs_warp
-from jaxrender.pipelines.base import (PipelineConfig, make_counts, points_from_vis,
-                                      poison_on_overflow, visibility)
+from jaxrender.pipelines.base import (
+    PipelineConfig,
+    make_counts,
+    points_from_vis,
+    poison_on_overflow,
+    visibility,
+)
 from jaxrender.pipelines.dacs_levels import SPACINGS, level_map, level_pixels, parent_pairs
 from jaxrender.pipelines.deferred import pack_gbuffer, unpack_gbuffer
 from jaxrender.pipelines.dispatch import compact, dispatch
-from jaxrender.pipelines.pixel_ids import (ID_KINDS, LUMAS, SPACES, check_choice, luma,
-                                           surface_ids)
+from jaxrender.pipelines.pixel_ids import ID_KINDS, LUMAS, SPACES, check_choice, luma, surface_ids
 from jaxrender.pipelines.registry import register
 from jaxrender.shading import shade
 from jaxrender.types import Array, Frame
+
+BORDERS = ("average", "shade")
 
 
 @dataclass(frozen=True)
@@ -51,7 +60,8 @@ class DacsConfig(PipelineConfig):
     luma: ``simple`` (0.25R + 0.5G + 0.25B) or ``rec709``; variance_space: luma of the
     ``display`` (clamped, sRGB-encoded) or ``linear`` colour.
     warp_width, warp_batches: the simulated warp (32 or 64 lanes) and the groups of W pixels
-    each warp searches per level."""
+    each warp searches per level. border: ``average`` or ``shade`` pixels that lack a complete
+    opposite pair of parents inside the image (see the module docstring)."""
 
     threshold: float = 0.01
     spacing: int = 4
@@ -60,6 +70,7 @@ class DacsConfig(PipelineConfig):
     variance_space: str = "display"
     warp_width: int = 32
     warp_batches: int = 4
+    border: str = "average"
 
     def __post_init__(self):
         super().__post_init__()
@@ -69,14 +80,16 @@ class DacsConfig(PipelineConfig):
         check_choice("ids", self.ids, ID_KINDS)
         check_choice("luma", self.luma, tuple(LUMAS))
         check_choice("variance_space", self.variance_space, SPACES)
+        check_choice("border", self.border, BORDERS)
         check_choice("warp_width", self.warp_width, dacs_warp.WARP_WIDTHS)
         if int(self.warp_batches) < 1:
             raise ValueError(f"warp_batches must be >= 1, got {self.warp_batches}")
 
 
 def _parents(idx: np.ndarray, level: int, h: int, w: int, spacing: int):
-    """Static parents of the flat pixels ``idx``: indices int[n, 4] (clamped), inside bool[n, 4]
-    and averaging weights float32[n, 4] (complete opposite pairs, else the inside parents)."""
+    """Static parents of the flat pixels ``idx``: indices int[n, 4] (clamped), inside bool[n, 4],
+    averaging weights float32[n, 4] over the opposite pairs lying wholly inside (else over the
+    parents inside), and ``has_pair`` bool[n] (a complete opposite pair is inside)."""
     y, x = idx // w, idx % w
     pairs = parent_pairs(level, spacing)
     offs = [o for pair in pairs for o in pair]
@@ -87,28 +100,31 @@ def _parents(idx: np.ndarray, level: int, h: int, w: int, spacing: int):
     pair_ok = np.stack([ins[:, 0] & ins[:, 1], ins[:, 2] & ins[:, 3]], axis=1)
     wts = np.repeat(pair_ok, 2, axis=1).astype(np.float64)
     none = ~np.any(pair_ok, axis=1)
-    wts[none] = ins[none]
+    wts[none] = ins[none]  # no complete pair: the parents that are inside
     wts /= np.maximum(wts.sum(axis=1, keepdims=True), 1.0)
-    return pidx.astype(np.int32), ins, wts.astype(np.float32)
+    return pidx.astype(np.int32), ins, wts.astype(np.float32), np.any(pair_ok, axis=1)
 
 
 def level_tables(h: int, w: int, spacing: int) -> dict:
     """Static per-level tables padded to the largest level (n_max pixels): ``pix`` int32[L, n],
     ``live`` bool[L, n], parents ``pidx`` int32[L, n, 4], ``ins`` bool[L, n, 4], averaging
-    ``wts`` float32[L, n, 4], ``cnt`` float32[L, n] (parents inside, at least 1) and ``sizes``."""
+    ``wts`` float32[L, n, 4], ``cnt`` float32[L, n] (parents inside, at least 1), ``pair``
+    bool[L, n] (a complete opposite pair is inside; level 0: True) and ``sizes``."""
     per = level_pixels(h, w, spacing)
     n_max = max(len(p) for p in per)
     n_l = len(per)
     t = {"pix": np.zeros((n_l, n_max), np.int32), "live": np.zeros((n_l, n_max), bool),
          "pidx": np.zeros((n_l, n_max, 4), np.int32), "ins": np.zeros((n_l, n_max, 4), bool),
-         "wts": np.zeros((n_l, n_max, 4), np.float32), "sizes": [len(p) for p in per]}
+         "wts": np.zeros((n_l, n_max, 4), np.float32),
+         "pair": np.ones((n_l, n_max), bool), "sizes": [len(p) for p in per]}
     for level, idx in enumerate(per):
         n = len(idx)
         t["pix"][level, :n] = idx
         t["live"][level, :n] = True
         if level > 0 and n:
-            pidx, ins, wts = _parents(idx, level, h, w, spacing)
+            pidx, ins, wts, pair = _parents(idx, level, h, w, spacing)
             t["pidx"][level, :n], t["ins"][level, :n], t["wts"][level, :n] = pidx, ins, wts
+            t["pair"][level, :n] = pair
     t["cnt"] = np.maximum(t["ins"].sum(axis=2), 1).astype(np.float32)
     return t
 
@@ -116,12 +132,12 @@ def level_tables(h: int, w: int, spacing: int) -> dict:
 def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, covered: Array,
                      threshold: Array, *, spacing: int = 4, luma_kind: str = "simple",
                      space: str = "display", chunk: int = 4096, warp_width: int = 32,
-                     warp_batches: int = 4):
+                     warp_batches: int = 4, border: str = "average"):
     """The DACS plan and reconstruction over any shading function.
 
     ``shade_fn(pixels int32[c], live bool[c]) -> float32[c, 3]`` shades flat pixel indices;
     ``ids`` int32[H, W] surface ids (-1 uncovered); ``covered`` bool[H, W] (uncovered pixels are
-    never shaded and come out 0). The levels run in a ``fori_loop`` (one copy of the shader in
+    never shaded and come out 0); ``border`` as DacsConfig. The levels run in a ``fori_loop`` (one copy of the shader in
     the program); each level compacts its pixels to shade and dispatches them in chunks.
     Returns (image float32[H, W, 3], shaded bool[H, W], level int32[H, W], counts)."""
     h, w = ids.shape
@@ -145,7 +161,8 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
             mean = jnp.sum(insf * lum, axis=1) / t["cnt"][level]
             var = jnp.sum(insf * (lum - mean[:, None]) ** 2, axis=1) / t["cnt"][level]
             cov = cov_f[pix] & live
-            need = cov & ((level == 0) | id_diff | (var >= thr))
+            no_pair = ~t["pair"][level] if border == "shade" else jnp.zeros_like(cov)
+            need = cov & ((level == 0) | no_pair | id_diff | (var >= thr))
         with jax.named_scope("interpolate"):
             interp = jnp.sum(wts[:, :, None] * c, axis=1)
             val = jnp.where((cov & ~need)[:, None], interp, 0.0)
@@ -180,14 +197,16 @@ def _render(scene, camera, threshold, cfg: DacsConfig) -> Frame:
     def shade_fn(items, live):
         # The deferred lighting pass's own path (G-buffer channels -> points -> shade), on the
         # attributes of just these pixels: DACS is deferred shading with an adaptive plan.
-        rows = pack_gbuffer(points_from_vis(scene, camera, vis, items))
+        # The barrier keeps the G-buffer channels materialised as deferred's planes are, so that
+        # the compiler cannot fuse attribute and lighting math differently from deferred.
+        rows = jax.lax.optimization_barrier(pack_gbuffer(points_from_vis(scene, camera, vis, items)))
         return shade(unpack_gbuffer(rows, camera, live), scene)
 
     with jax.named_scope("dacs"):
         image, shaded, level, c = dacs_reconstruct(
             shade_fn, ids, covered, threshold, spacing=cfg.spacing, luma_kind=cfg.luma,
             space=cfg.variance_space, chunk=cfg.chunk, warp_width=cfg.warp_width,
-            warp_batches=cfg.warp_batches)
+            warp_batches=cfg.warp_batches, border=cfg.border)
     image = poison_on_overflow(image, vis.counts["overflow"])
     warps = c.pop("warps")
     counts = make_counts(waves=warps, lane_utilization=c["warp_lane_utilization"],

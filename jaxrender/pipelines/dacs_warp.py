@@ -48,7 +48,7 @@ def simulate_level(need: Array, width: int, batches: int) -> dict:
 
     xs = (jnp.moveaxis(need, 1, 0), jnp.moveaxis(valid, 1, 0))
     q, (searched, full, naive) = jax.lax.scan(step, jnp.zeros((warps,), jnp.int32), xs)
-    i32 = lambda a: jnp.sum(a, dtype=jnp.int32)  # noqa: E731
+    i32 = lambda a: jnp.sum(a, dtype=jnp.int32)
     search = i32(searched)
     shade = i32(full) + i32(q > 0)
     return {"search_steps": search, "shade_steps": shade, "naive_shade_steps": i32(naive),
@@ -66,7 +66,7 @@ def simulate(needs: list[Array], width: int = 32, batches: int = 4) -> dict:
     steps = tot["search_steps"] + tot["shade_steps"]
     useful = (tot["searched"] + tot["shaded"]).astype(jnp.float32)
     naive_steps = tot["search_steps"] + tot["naive_shade_steps"]
-    f = lambda a: jnp.maximum(a, 1).astype(jnp.float32) * w  # noqa: E731
+    f = lambda a: jnp.maximum(a, 1).astype(jnp.float32) * w
     return {
         "warp_simd_steps": steps,
         "warp_search_steps": tot["search_steps"],

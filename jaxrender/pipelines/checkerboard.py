@@ -1,0 +1,239 @@
+"""Checkerboard rendering: shade half of the pixels each frame, reconstruct the other half.
+
+Sampling plan: pixel (x, y) of frame t is shaded when (x + y + frame + t) is even, so the two
+halves alternate every frame. ``pattern="checker"`` shades full-resolution pixels;
+``pattern="2x1"`` is half-width rendering with 2 samples per pixel (checkerboard rendering as
+consoles do it): the same checker of shaded samples, the other sample of each 2x1 pair covered
+by the full-resolution visibility, but each shaded sample is one pixel of a half-width target,
+so its texture footprint is two pixels wide (``lod_bias = -1`` compensates). A covered pixel
+none of whose 4 neighbours is covered (a lone pixel, a 1-pixel-wide image) cannot be
+reconstructed and is shaded as well (counted).
+
+Reconstruction of a missing pixel, geometry-aware from a full-resolution visibility pass:
+
+- temporal (``render_sequence``, frames t >= 1): the pixel is reprojected into frame t-1
+  through the known camera motion (``metrics.reproject``) and the nearest pixel of the previous
+  output is taken, unless it is off screen, its depth disagrees (disocclusion) or its surface id
+  differs; then
+- spatial: the mean of the 4 neighbours (all shaded this frame) that show the same surface id;
+  when none does, the neighbour nearest in depth.
+
+The single-frame ``render`` (the registered entry) is the spatial-only first frame.
+Counts: ``shade_invocations`` (pixels shaded), ``reconstruction_reads`` (neighbour colours
+read + history colours read), split into ``spatial_reads`` and ``history_reads``;
+``history_rejected``, ``orphans_shaded``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.metrics.temporal import DEFAULT_DEPTH_TOLERANCE, reproject
+from jaxrender.pipelines.base import (
+    PipelineConfig,
+    make_counts,
+    pipeline_entry,
+    points_from_vis,
+    poison_on_overflow,
+    visibility,
+)
+from jaxrender.pipelines.deferred import pack_gbuffer, tile_waves, unpack_gbuffer
+from jaxrender.pipelines.dispatch import shade_pixels
+from jaxrender.pipelines.pixel_ids import (
+    ID_KINDS,
+    check_choice,
+    inside,
+    lod_scaled,
+    shift,
+    surface_ids,
+)
+from jaxrender.pipelines.registry import register
+from jaxrender.scene.camera import Camera
+from jaxrender.shading import shade
+from jaxrender.types import Array, Frame
+
+PATTERNS = ("checker", "2x1")
+NEIGHBOURS = ((0, -1), (0, 1), (-1, 0), (1, 0))  # (dy, dx): left, right, up, down
+
+
+@dataclass(frozen=True)
+class CheckerboardConfig(PipelineConfig):
+    """pattern: ``checker`` (pixel checker) or ``2x1`` (half-width, 2 samples per pixel).
+    frame: frame-index offset of the checker (the parity of ``render``'s single frame).
+    temporal: reuse the reprojected previous frame in ``render_sequence``.
+    ids: surface id used for reconstruction and rejection (triangle, object, material, none).
+    lod_bias: texture LOD bias (-1: one MIP level sharper). depth_tolerance: relative linear
+    depth difference at which history is rejected. wave_size: lanes per wave (counts only)."""
+
+    pattern: str = "checker"
+    frame: int = 0
+    temporal: bool = True
+    ids: str = "object"
+    lod_bias: float = 0.0
+    depth_tolerance: float = DEFAULT_DEPTH_TOLERANCE
+    wave_size: int = 32
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_choice("pattern", self.pattern, PATTERNS)
+        check_choice("ids", self.ids, ID_KINDS)
+        check_choice("wave_size", self.wave_size, (32, 64))
+        if not float(self.depth_tolerance) > 0.0:
+            raise ValueError(f"depth_tolerance must be > 0, got {self.depth_tolerance}")
+
+
+class History(NamedTuple):
+    """What frame t keeps for frame t+1: its output, surface ids, depth and camera; ``valid``
+    False before the first frame."""
+
+    image: Array
+    ids: Array
+    depth: Array
+    camera: Camera
+    valid: Array
+
+
+def checker_mask(height: int, width: int, t: Array) -> Array:
+    """bool[H, W]: the pixels shaded at frame index ``t`` (traced int)."""
+    y = jnp.arange(height, dtype=jnp.int32)[:, None]
+    x = jnp.arange(width, dtype=jnp.int32)[None, :]
+    return (x + y + jnp.asarray(t, jnp.int32)) % 2 == 0
+
+
+def _spatial(img, ids, depth, ncov):
+    """Geometry-aware 4-neighbour reconstruction of every pixel (used where missing)."""
+    cs = [shift(img, dy, dx) for dy, dx in NEIGHBOURS]
+    ok = [nc & (shift(ids, dy, dx, -2) == ids) for nc, (dy, dx) in zip(ncov, NEIGHBOURS)]
+    okf = [o.astype(jnp.float32)[..., None] for o in ok]
+    wsum = sum(okf)
+    avg = sum(o * c for o, c in zip(okf, cs)) / jnp.maximum(wsum, 1.0)
+    inf = jnp.float32(jnp.inf)
+    dd = jnp.stack([jnp.where(nc, jnp.abs(shift(depth, dy, dx, 0.0) - depth), inf)
+                    for nc, (dy, dx) in zip(ncov, NEIGHBOURS)], axis=-1)
+    best = jnp.argmin(dd, axis=-1)
+    nearest = jnp.take_along_axis(jnp.stack(cs, axis=-2), best[..., None, None], axis=-2)[..., 0, :]
+    return jnp.where(wsum > 0.0, avg, nearest)
+
+
+def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
+    """One frame at traced index ``t`` given the previous frame's History (ignored when
+    ``prev.valid`` is False or ``cfg.temporal`` is off). Returns (Frame, History)."""
+    h, w = cfg.height, cfg.width
+    with jax.named_scope("visibility"):
+        vis = visibility(scene, camera, cfg)
+        covered = vis.tri_id >= 0
+        ids = surface_ids(scene, vis.tri_id, cfg.ids)
+    with jax.named_scope("plan"):
+        ins = [jnp.asarray(inside(h, w, dy, dx)) for dy, dx in NEIGHBOURS]
+        ncov = [i & shift(covered, dy, dx, False) for i, (dy, dx) in zip(ins, NEIGHBOURS)]
+        any_n = ncov[0] | ncov[1] | ncov[2] | ncov[3]
+        pattern = checker_mask(h, w, cfg.frame + t)
+        orphan = covered & ~pattern & ~any_n
+        active = covered & (pattern | orphan)
+
+    scale = 2.0 ** float(cfg.lod_bias)
+    sx = scale * (2.0 if cfg.pattern == "2x1" else 1.0)
+
+    def points_of(items):
+        return lod_scaled(points_from_vis(scene, camera, vis, items), sx, scale)
+
+    def shade_fn(pts):  # the deferred lighting pass's path, as DACS
+        rows = jax.lax.optimization_barrier(pack_gbuffer(pts))
+        return shade(unpack_gbuffer(rows, camera, pts.valid), scene)
+
+    with jax.named_scope("shade"):
+        img, dc = shade_pixels(active.reshape(-1), points_of, shade_fn,
+                               jnp.zeros((h * w, 3), jnp.float32), cfg.chunk)
+        img = img.reshape(h, w, 3)
+
+    missing = covered & ~active
+    with jax.named_scope("spatial"):
+        spatial = _spatial(img, ids, vis.depth, ncov)
+    with jax.named_scope("temporal"):
+        if cfg.temporal:
+            rp = reproject(vis.depth, camera, prev.camera, w, h, prev_depth=prev.depth,
+                           depth_tolerance=cfg.depth_tolerance)
+            ix = jnp.clip(jnp.floor(rp.position[..., 0]), 0, w - 1).astype(jnp.int32)
+            iy = jnp.clip(jnp.floor(rp.position[..., 1]), 0, h - 1).astype(jnp.int32)
+            hist_ok = prev.valid & rp.valid & (prev.ids[iy, ix] == ids)
+            use_hist = missing & hist_ok
+            recon = jnp.where(use_hist[..., None], prev.image[iy, ix], spatial)
+            rejected = missing & prev.valid & ~hist_ok
+        else:
+            use_hist = rejected = jnp.zeros((h, w), bool)
+            recon = spatial
+    image = jnp.where(active[..., None], img, jnp.where(missing[..., None], recon, 0.0))
+    image = poison_on_overflow(image, vis.counts["overflow"])
+
+    with jax.named_scope("counts"):
+        n_in = sum(i.astype(jnp.int32) for i in ins)
+        spatial_px = missing & ~use_hist
+        spatial_reads = jnp.sum(jnp.where(spatial_px, n_in, 0), dtype=jnp.int32)
+        history_reads = jnp.sum(use_hist, dtype=jnp.int32)
+        waves, util = tile_waves(active, cfg.wave_size, dc["invocations"])
+        counts = make_counts(
+            shade_invocations=dc["invocations"], covered_pixels=jnp.sum(covered, dtype=jnp.int32),
+            waves=waves, lane_utilization=util,
+            reconstruction_reads=spatial_reads + history_reads, spatial_reads=spatial_reads,
+            history_reads=history_reads, history_rejected=jnp.sum(rejected, dtype=jnp.int32),
+            orphans_shaded=jnp.sum(orphan, dtype=jnp.int32),
+            alpha_invocations=vis.counts["alpha_invocations"], overflow=vis.counts["overflow"])
+    frame = Frame(image, counts, {"shaded": active, "history": use_hist})
+    return frame, History(image, ids, vis.depth, camera, jnp.asarray(True))
+
+
+def empty_history(camera, cfg) -> History:
+    h, w = cfg.height, cfg.width
+    return History(jnp.zeros((h, w, 3), jnp.float32), jnp.full((h, w), -1, jnp.int32),
+                   jnp.ones((h, w), jnp.float32), camera, jnp.asarray(False))
+
+
+@register("checkerboard", CheckerboardConfig)
+@pipeline_entry
+def render(scene, camera, cfg: CheckerboardConfig) -> Frame:
+    """Checkerboard: half the pixels per frame, geometry-aware spatial reconstruction."""
+    frame, _ = checker_frame(scene, camera, jnp.int32(0), empty_history(camera, cfg), cfg)
+    return frame
+
+
+def _stack_cameras(cameras) -> Camera:
+    if hasattr(cameras, "cameras"):  # a CameraPath
+        return cameras.cameras
+    if isinstance(cameras, (list, tuple)):
+        cams = [c[0] if isinstance(c, tuple) else c for c in cameras]
+        return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *cams)
+    return cameras
+
+
+def _sequence(scene, cameras: Camera, cfg: CheckerboardConfig) -> Frame:
+    n = int(np.shape(cameras.eye)[0])
+    first = jax.tree_util.tree_map(lambda a: a[0], cameras)
+
+    def step(hist, xs):
+        cam, t = xs
+        frame, hist = checker_frame(scene, cam, t, hist, cfg)
+        return hist, frame
+
+    _, frames = jax.lax.scan(step, empty_history(first, cfg),
+                             (cameras, jnp.arange(n, dtype=jnp.int32)))
+    return frames
+
+
+_sequence_jit = jax.jit(_sequence, static_argnums=2)
+
+
+def render_sequence(scene, cameras, cfg: CheckerboardConfig) -> Frame:
+    """Render a camera path (CameraPath, batched Camera with a leading T axis, or a list) with
+    the checker alternating every frame and, with ``cfg.temporal``, temporal reconstruction
+    from the previous frame. Returns a Frame with image (T, H, W, 3), counts (T,) and aux
+    (T, H, W); one compile per (scene shape, T, config)."""
+    frames = _sequence_jit(scene, _stack_cameras(cameras), cfg)
+    over = frames.counts["overflow"]
+    if not isinstance(over, jax.core.Tracer) and int(jnp.max(over)) > 0:
+        raise OverflowError(f"checkerboard: fragments exceeded fragment_capacity ({cfg.capacity})")
+    return frames
