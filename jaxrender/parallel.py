@@ -84,9 +84,11 @@ def pad_batch(batched, multiple: int):
     return jax.tree_util.tree_map(one, batched), n
 
 
-def shard_batch(batched, mesh: Mesh):
-    """Pad and place a batch on the mesh, split along its leading axis. Returns (array, n)."""
-    padded, n = pad_batch(batched, mesh.size)
+def shard_batch(batched, mesh: Mesh, size: int = 0):
+    """Pad (to a multiple of the device count, or to ``size`` items) and place a batch on the
+    mesh, split along its leading axis. Returns (array, n)."""
+    n = batch_size(batched)
+    padded, _ = pad_batch(batched, size if 0 < n < size else mesh.size)
     return jax.device_put(padded, batch_sharding(mesh)), n
 
 
@@ -113,7 +115,7 @@ def sharded_map(fn: Callable, batched, *rest, mesh: Mesh | None = None, chunk: i
     outs = []
     for start in range(0, n, step):
         part = jax.tree_util.tree_map(lambda a: a[start:start + step], batched)
-        xs, m = shard_batch(part, mesh)
+        xs, m = shard_batch(part, mesh, size=step)  # the last slice too: one compile
         out = prog(xs, *rest)
         outs.append(jax.tree_util.tree_map(lambda a: a[:m], out))
     if len(outs) == 1:
