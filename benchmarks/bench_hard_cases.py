@@ -98,6 +98,7 @@ def evaluate(case_name: str, pipeline: str, resolution) -> dict:
         **{k: counts.get(k, math.nan) for k in COUNT_COLUMNS},
         "image_max": float(np.max(img)) if img.size else 0.0,
         "image_min": float(np.min(img)) if img.size else 0.0,
+        "image_range": float(np.max(np.ptp(img.reshape(-1, 3), axis=0))) if img.size else 0.0,
     }
     row["within_bound"] = bool(row["rmse"] <= case.bound + 1e-7)
     return row

@@ -100,10 +100,18 @@ def _pad(parts: list[MeshPart]) -> list[MeshPart]:
     return parts[:-1] + [padded]
 
 
-def _scene(name: str, parts: list[MeshPart], camera, *, lights=None, doc: str = "") -> Scene:
-    return build_scene(_pad(parts), list(_MATERIALS), _textures(), lights or _lights(), camera,
-                       name=name, description=doc.strip().splitlines()[0] if doc else name,
-                       effects=EFFECTS, texture_resolution=TEXTURE_RES)
+# Scene.name and Scene.description are static (hashable metadata): were they the case names,
+# every case would compile every pipeline anew. They are one string; ``CASES`` has the names.
+SCENE_NAME = "hard_cases"
+SCENE_DESCRIPTION = "a hard case of jaxrender.scene.hard_cases"
+
+
+def _scene(name: str, parts: list[MeshPart], camera, *, lights=None, doc: str = "",
+           materials=_MATERIALS) -> Scene:
+    del name, doc  # see SCENE_NAME
+    return build_scene(_pad(parts), list(materials), _textures(), lights or _lights(), camera,
+                       name=SCENE_NAME, description=SCENE_DESCRIPTION, effects=EFFECTS,
+                       texture_resolution=TEXTURE_RES)
 
 
 def _backdrop(z=-2.0, size=12.0, material=0, uv_scale=(4.0, 4.0), offset=(0, 0, 0), scale=1.0):
@@ -316,12 +324,9 @@ def grazing() -> Scene:
 
 def _phong(exponent: float, name: str, doc: str) -> Scene:
     mat = dataclasses.replace(_OBJECT, shininess=float(exponent))
-    s = build_scene(_pad([_backdrop(), _sphere(0.9, lat=16, lon=24)]),
-                    [_BACKDROP, mat, _SECOND, _NOISE], _textures(),
-                    _lights(point=((0.0, 0.0, 2.5), 8.0)), _camera(), name=name,
-                    description=doc.strip().splitlines()[0], effects=EFFECTS,
-                    texture_resolution=TEXTURE_RES)
-    return s
+    return _scene(name, [_backdrop(), _sphere(0.9, lat=16, lon=24)], _camera(),
+                  lights=_lights(point=((0.0, 0.0, 2.5), 8.0)), doc=doc,
+                  materials=(_BACKDROP, mat, _SECOND, _NOISE))
 
 
 def phong_1e4() -> Scene:
