@@ -75,8 +75,10 @@ def _clip_against(poly: Array, n: Array, plane: Array) -> tuple[Array, Array]:
     emit_hit = live & (a_in != b_in)
     cand = jnp.stack([a, hit], axis=2).reshape(poly.shape[0], 2 * MAX_POLY, 4)
     mask = jnp.stack([emit_a, emit_hit], axis=2).reshape(poly.shape[0], 2 * MAX_POLY)
-    order = jnp.argsort(~mask, axis=1, stable=True)[:, :MAX_POLY]
-    out = jnp.take_along_axis(cand, order[..., None], axis=1)
+    # Compact the emitted vertices to the front, in order (a prefix sum, no sort).
+    pos = jnp.where(mask, jnp.cumsum(mask, axis=1) - 1, MAX_POLY)
+    rows = jnp.broadcast_to(jnp.arange(poly.shape[0])[:, None], pos.shape)
+    out = jnp.zeros_like(poly).at[rows, pos].set(cand, mode="drop")
     return out, jnp.minimum(jnp.sum(mask, axis=1), MAX_POLY).astype(jnp.int32)
 
 
