@@ -114,39 +114,57 @@ def raster_st(st: np.ndarray, res: int, conservative: bool = False
     bounding box: the separating-axis test). Returns (owner int64[res, res] lowest covering
     triangle or -1, hits int32[res, res] covering triangles per texel)."""
     v = _snap(st, res)
-    owner = np.full((res, res), -1, np.int64)
-    hits = np.zeros((res, res), np.int32)
+    xs, ys = v[..., 0], v[..., 1]
+    area2 = ((xs[:, 1] - xs[:, 0]) * (ys[:, 2] - ys[:, 0])
+             - (ys[:, 1] - ys[:, 0]) * (xs[:, 2] - xs[:, 0]))
     half = SUBPIXEL // 2
-    for k in range(v.shape[0]):
-        xs, ys = v[k, :, 0], v[k, :, 1]
-        area2 = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (ys[1] - ys[0]) * (xs[2] - xs[0])
-        if area2 == 0:
-            continue
-        sign = -1 if area2 < 0 else 1
-        pad = half if conservative else 0
-        lo_x = max(int(-((half + pad - xs.min()) // SUBPIXEL)), 0)
-        hi_x = min(int((xs.max() + pad - half) // SUBPIXEL), res - 1)
-        lo_y = max(int(-((half + pad - ys.min()) // SUBPIXEL)), 0)
-        hi_y = min(int((ys.max() + pad - half) // SUBPIXEL), res - 1)
-        if lo_x > hi_x or lo_y > hi_y:
-            continue
-        py, px = np.mgrid[lo_y:hi_y + 1, lo_x:hi_x + 1]
-        sx, sy = px * SUBPIXEL + half, py * SUBPIXEL + half
-        inside = np.ones(px.shape, bool)
-        for i in range(3):
-            a, b = (i + 1) % 3, (i + 2) % 3
-            dx, dy = (xs[b] - xs[a]) * sign, (ys[b] - ys[a]) * sign
-            e = dx * (sy - ys[a]) - dy * (sx - xs[a])
-            if conservative:
-                inside &= e + (abs(dx) + abs(dy)) * half >= 0
-            else:
-                top_left = dy < 0 or (dy == 0 and dx > 0)
-                inside &= (e > 0) | ((e == 0) & top_left)
-        yy, xx = py[inside], px[inside]
-        hits[yy, xx] += 1
-        free = owner[yy, xx] < 0
-        owner[yy[free], xx[free]] = k
-    return owner, hits
+    pad = half if conservative else 0
+    lo_x = np.maximum(-((half + pad - xs.min(1)) // SUBPIXEL), 0)
+    hi_x = np.minimum((xs.max(1) + pad - half) // SUBPIXEL, res - 1)
+    lo_y = np.maximum(-((half + pad - ys.min(1)) // SUBPIXEL), 0)
+    hi_y = np.minimum((ys.max(1) + pad - half) // SUBPIXEL, res - 1)
+    live = (area2 != 0) & (lo_x <= hi_x) & (lo_y <= hi_y)
+    span = np.maximum(hi_x - lo_x, hi_y - lo_y) + 1
+    big = np.int64(np.iinfo(np.int64).max)
+    owner = np.full(res * res, big, np.int64)
+    hits = np.zeros(res * res, np.int32)
+    # Triangles in batches of similar bounding-box size, each batch on an [n, S, S] grid.
+    size = 1
+    while True:
+        sel = np.nonzero(live & (span <= size) & (span > size // 2))[0]
+        for start in range(0, sel.size, max(1, (1 << 20) // (size * size))):
+            k = sel[start:start + max(1, (1 << 20) // (size * size))]
+            _cover(k, xs, ys, area2, lo_x, lo_y, hi_x, hi_y, size, res, conservative, owner,
+                   hits)
+        if size >= res:
+            break
+        size *= 2
+    owner = np.where(owner == big, -1, owner).reshape(res, res)
+    return owner, hits.reshape(res, res)
+
+
+def _cover(k, xs, ys, area2, lo_x, lo_y, hi_x, hi_y, size, res, conservative, owner, hits):
+    half = SUBPIXEL // 2
+    g = np.arange(size)
+    px = lo_x[k][:, None, None] + g[None, None, :]
+    py = lo_y[k][:, None, None] + g[None, :, None]
+    inside = (px <= hi_x[k][:, None, None]) & (py <= hi_y[k][:, None, None])
+    sx, sy = px * SUBPIXEL + half, py * SUBPIXEL + half
+    sign = np.where(area2[k] < 0, -1, 1)
+    for i in range(3):
+        a, b = (i + 1) % 3, (i + 2) % 3
+        dx = ((xs[k, b] - xs[k, a]) * sign)[:, None, None]
+        dy = ((ys[k, b] - ys[k, a]) * sign)[:, None, None]
+        e = dx * (sy - ys[k, a][:, None, None]) - dy * (sx - xs[k, a][:, None, None])
+        if conservative:
+            inside &= e + (np.abs(dx) + np.abs(dy)) * half >= 0
+        else:
+            top_left = (dy < 0) | ((dy == 0) & (dx > 0))
+            inside &= (e > 0) | ((e == 0) & top_left)
+    tri = np.broadcast_to(k[:, None, None], inside.shape)[inside]
+    pix = (py * res + px)[inside]
+    np.minimum.at(owner, pix, tri)
+    np.add.at(hits, pix, 1)
 
 
 def _raster_owner(st: np.ndarray, res: int) -> np.ndarray:
