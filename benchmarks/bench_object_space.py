@@ -20,6 +20,7 @@ import numpy as np
 from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.pipelines import object_space as osp
 from jaxrender.scene.builtin import builtin_scene
+from jaxrender.shading import with_shadow_map
 
 
 def _time(fn, repeats):
@@ -52,6 +53,8 @@ def main(argv=None):
     dr = get_pipeline("deferred").render
     for name in a.scenes.split(","):
         scene = builtin_scene(name)
+        if scene.effects.shadows:
+            scene = with_shadow_map(scene)
         dcfg = make_config("deferred", width=w, height=h)
         _, d_ms, _ = _time(lambda: dr(scene, scene.camera, dcfg).image, a.repeats)
         for spp in (float(s) for s in a.store_per_pixel.split(",")):
