@@ -56,7 +56,7 @@ def main(argv=None):
         if scene.effects.shadows:
             scene = with_shadow_map(scene)
         dcfg = make_config("deferred", width=w, height=h)
-        _, d_ms, _ = _time(lambda: dr(scene, scene.camera, dcfg).image, a.repeats)
+        _, d_ms, _ = _time(lambda s=scene, c=dcfg: dr(s, s.camera, c).image, a.repeats)
         for spp in (float(s) for s in a.store_per_pixel.split(",")):
             cfg = osp.ObjectSpaceConfig(width=w, height=h, store_shadels=int(spp * w * h))
             t0 = time.perf_counter()
@@ -65,7 +65,7 @@ def main(argv=None):
             res = np.asarray(sheet.obj_res)
             srcs = ",".join(sorted(set(sheet.sources)))
             sheets = f"{len(res)} x {res.min()}..{res.max()} ({srcs})"
-            frame, ms, comp = _time(lambda: osp.render(scene, scene.camera, cfg), a.repeats)
+            frame, ms, comp = _time(lambda s=scene, c=cfg: osp.render(s, s.camera, c), a.repeats)
             c = {k: float(v) for k, v in frame.counts.items()}
             print(f"| {name} | {spp:g} | {sheets} | {build_s:.1f} | {c['covered_pixels']:.0f} "
                   f"| {c['shadels_per_pixel']:.2f} | {c['shade_invocations']:.0f} "

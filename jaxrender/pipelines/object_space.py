@@ -16,7 +16,6 @@ shaded when its inputs did not change (no view-dependent effect, or the eye did 
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import jax
@@ -155,7 +154,7 @@ def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
     nc = sheet.n_chunks
     with jax.named_scope("visibility"):
         vis = visibility(scene, camera, cfg)
-        flat = lambda a: a.reshape((w * h,) + a.shape[2:])  # noqa: E731
+        flat = lambda a: a.reshape((w * h,) + a.shape[2:])
         tri = flat(vis.tri_id)
         fp = footprint(scene, sheet, tri, flat(vis.bary), flat(vis.dbary_dx), flat(vis.dbary_dy))
 
@@ -221,7 +220,7 @@ def _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing, u
     finest = jnp.sum(mark_chunks(taps(fp, sheet, al.bias, "finest", cfg.aniso_taps), nc),
                      dtype=jnp.int32)
     taps_read = jnp.sum(t.weight > 0.0, dtype=jnp.int32)
-    f32 = lambda x: jnp.asarray(x).astype(jnp.float32)  # noqa: E731
+    f32 = lambda x: jnp.asarray(x).astype(jnp.float32)
     counts = make_counts(
         shade_invocations=inv,
         helper_lanes=chunks_shaded * LANES - inv,

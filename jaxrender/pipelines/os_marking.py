@@ -113,7 +113,7 @@ def taps(fp: Footprint, sheet: ShadeSheet, bias: Array, mode: str, aniso_taps: i
                     chunks.append(base + (y // CHUNK) * cps + x // CHUNK)
                     lanes.append((y % CHUNK) * CHUNK + x % CHUNK)
                     weights.append(wl * wx * wy / n)
-    stack = lambda xs: jnp.stack(xs, axis=-1)  # noqa: E731
+    stack = lambda xs: jnp.stack(xs, axis=-1)
     w = jnp.where(fp.covered[:, None], stack(weights), 0.0)
     chunk = jnp.where(w > 0.0, stack(chunks), 0)
     lane = jnp.where(w > 0.0, stack(lanes), 0)

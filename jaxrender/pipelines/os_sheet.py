@@ -246,8 +246,8 @@ def build_sheet(scene, cfg) -> ShadeSheet:
             n += cps * cps
         for lv in range(nl, max_l):
             base[o, lv] = base[o, nl - 1]
-    i32 = lambda a: jnp.asarray(np.asarray(a, np.int32))  # noqa: E731
-    cat = lambda xs: i32(np.concatenate(xs) if xs else np.zeros(0))  # noqa: E731
+    i32 = lambda a: jnp.asarray(np.asarray(a, np.int32))
+    cat = lambda xs: i32(np.concatenate(xs) if xs else np.zeros(0))
     level0 = sum((r // CHUNK) ** 2 for r in res)
     sheet = ShadeSheet(
         corner_st=jnp.asarray(corner.astype(np.float32)), owner=cat(owners), chunk_obj=cat(c_obj),

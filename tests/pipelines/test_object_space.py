@@ -19,8 +19,7 @@ from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.pipelines import object_space as osp
 from jaxrender.pipelines.os_sheet import LANES, build_sheet, raster_st
 from jaxrender.raster import rasterize_clip
-from jaxrender.scene import MeshPart, look_at
-from jaxrender.scene import camera_path
+from jaxrender.scene import MeshPart, camera_path, look_at
 from jaxrender.scene.builtin import stripes
 from jaxrender.scene.lights import make_lights
 from jaxrender.scene.materials import Material
