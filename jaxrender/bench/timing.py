@@ -55,11 +55,13 @@ def memory_analysis(compiled) -> dict:
     return out
 
 
-def time_compiled(fn, *args, repeats: int = 10, warmup: int = 2, **static) -> dict:
+def time_compiled(fn, *args, repeats: int = 10, warmup: int = 2, keep_compiled: bool = False,
+                  **static) -> dict:
     """AOT-compile ``fn`` (jitted, or jitted here) for ``args`` and time steady-state calls.
 
     Returns median/min/max ms, ``compile_s`` (lower + compile), the program's memory analysis
-    and ``out`` (the last result; pop it before printing)."""
+    and ``out`` (the last result; pop it before printing), and with ``keep_compiled`` the
+    compiled program as ``compiled``."""
     if not hasattr(fn, "lower"):
         fn = jax.jit(fn)
     t0 = time.perf_counter()
@@ -73,7 +75,8 @@ def time_compiled(fn, *args, repeats: int = 10, warmup: int = 2, **static) -> di
         t0 = time.perf_counter()
         out = jax.block_until_ready(compiled(*args))
         samples.append(time.perf_counter() - t0)
-    return dict(_stats(samples), compile_s=compile_s, **memory_analysis(compiled), out=out)
+    extra = {"compiled": compiled} if keep_compiled else {}
+    return dict(_stats(samples), compile_s=compile_s, **memory_analysis(compiled), out=out, **extra)
 
 
 def time_first_call(call: Callable[[], object], repeats: int = 10) -> dict:
