@@ -29,6 +29,7 @@ import ctypes
 import statistics
 import sys
 import time
+import warnings
 
 import jax
 import jax.numpy as jnp
@@ -81,8 +82,10 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
 
 def jaxrenderer_available() -> str | None:
     try:
-        import renderer  # noqa: F401
-        from renderer.shaders.depth import DepthShader  # noqa: F401
+        with warnings.catch_warnings():  # its decorators warn once per function (jaxtyping)
+            warnings.simplefilter("ignore")
+            import renderer  # noqa: F401
+            from renderer.shaders.depth import DepthShader  # noqa: F401
     except Exception as e:  # noqa: BLE001
         return f"jaxrenderer not importable ({type(e).__name__}: {e})"
     return None
@@ -351,7 +354,9 @@ def main(argv=None) -> int:
         if not jr_reason and (width, height, n) in jr_cases:
             try:
                 v, f = terrain(n)
-                t, z = jaxrenderer_depth(v, f, width, height, max(2, a.repeats // 2))
+                with warnings.catch_warnings():  # jaxtyping warns at every trace
+                    warnings.simplefilter("ignore")
+                    t, z = jaxrenderer_depth(v, f, width, height, max(2, a.repeats // 2))
                 row.update(t)
                 if ours is not None:
                     row["jaxrenderer_coverage_agree"] = float(np.mean((z < 1.0) == (ours >= 0)))

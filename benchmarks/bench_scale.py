@@ -75,8 +75,8 @@ def scale_rows(label, fn, scene, cameras, cfg, n_frames, repeats, chunk, extract
     ref = [extract(o) for o in loop_out]
     for mode, mesh in _modes(jax.device_count()):
         try:
-            out, med, comp = _time(lambda: parallel.render_frames(fn, scene, cameras, cfg,
-                                                                  mesh=mesh, chunk=chunk), repeats)
+            out, med, comp = _time(lambda m=mesh: parallel.render_frames(fn, scene, cameras, cfg,
+                                                                     mesh=m, chunk=chunk), repeats)
             rows.append(dict(base, mode=mode, devices=mesh.size, ms_per_frame=1e3 * med / n_frames,
                              total_ms=1e3 * med, compile_s=comp, **_compare(extract(out), ref)))
         except Exception as e:  # noqa: BLE001 - e.g. out of memory for a large batch
@@ -99,8 +99,8 @@ def dacs_sweep_rows(scene, camera, width, height, thresholds, repeats, chunk):
                  total_ms=1e3 * med, compile_s=comp)]
     for mode, mesh in _modes(jax.device_count()):
         try:
-            out, med, comp = _time(lambda: parallel.sharded_map(point, thr, scene, camera,
-                                                                mesh=mesh, chunk=chunk), repeats)
+            out, med, comp = _time(lambda m=mesh: parallel.sharded_map(point, thr, scene, camera,
+                                                                   mesh=m, chunk=chunk), repeats)
             rows.append(dict(base, mode=mode, devices=mesh.size,
                              ms_per_frame=1e3 * med / len(thresholds), total_ms=1e3 * med,
                              compile_s=comp, **_compare(out, loop_out)))

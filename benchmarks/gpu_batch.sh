@@ -12,6 +12,7 @@
 # pipeline on every built-in scene at 1080p), pipelines (bench_pipelines.py, if present).
 # Files in $OUT (8 at most): batch.log (everything, with step times and exit codes), env.txt,
 # raster.json, peers.json, scale.json, bench.json, metrics.md, pipelines.md.
+{  # the whole script is read before it runs: editing it during a run changes nothing
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
@@ -81,3 +82,4 @@ else
 fi
 note "all done; files: $(ls "$OUT" | tr '\n' ' ')"
 exit 0
+}

@@ -37,7 +37,7 @@ process runs its share of static sweep points, chosen by ``jax.process_index()``
 from __future__ import annotations
 
 import functools
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -114,10 +114,10 @@ def sharded_map(fn: Callable, batched, *rest, mesh: Mesh | None = None, chunk: i
     rest = jax.device_put(rest, replicated(mesh))
     outs = []
     for start in range(0, n, step):
-        part = jax.tree_util.tree_map(lambda a: a[start:start + step], batched)
+        part = jax.tree_util.tree_map(lambda a, s=start: a[s:s + step], batched)
         xs, m = shard_batch(part, mesh, size=step)  # the last slice too: one compile
         out = prog(xs, *rest)
-        outs.append(jax.tree_util.tree_map(lambda a: a[:m], out))
+        outs.append(jax.tree_util.tree_map(lambda a, m=m: a[:m], out))
     if len(outs) == 1:
         return outs[0]
     return jax.tree_util.tree_map(lambda *a: jnp.concatenate(a, axis=0), *outs)

@@ -110,7 +110,7 @@ def test_two_devices_equal_unsharded():
                XLA_FLAGS=(os.environ.get("XLA_FLAGS", "")
                           + " --xla_force_host_platform_device_count=2").strip(),
                PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    p = subprocess.run([sys.executable, "-c", _TWO_DEVICES], cwd=ROOT, env=env,
+    p = subprocess.run([sys.executable, "-c", _TWO_DEVICES], check=False, cwd=ROOT, env=env,
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     r = json.loads(p.stdout.strip().splitlines()[-1])

@@ -36,7 +36,7 @@ def time_metrics(width: int, height: int, frames: int, repeats: int = 5):
             row = dict(metric=name, resolution=f"{width}x{height}", frames=t)
             try:
                 r_, t_ = (ref[0], test[0]) if t == 1 and name != "temporal_error" else (ref[:t], test[:t])
-                r = time_first_call(lambda: fn(r_, t_), repeats)
+                r = time_first_call(lambda fn=fn, r_=r_, t_=t_: fn(r_, t_), repeats)
                 r.pop("out")
                 row.update(r, per_frame_ms=r["median_ms"] / t)
             except Exception as e:  # noqa: BLE001

@@ -80,7 +80,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
                 pipe = get_pipeline(pname)
                 cfg = make_config(pname, width=width, height=height, **pparams)
                 comp = compile_render(pipe.render, scene, camera, cfg)
-                r = time_first_call(lambda: comp.call(scene, camera), repeats)
+                r = time_first_call(lambda c=comp, s=scene, k=camera: c.call(s, k), repeats)
                 frame = r.pop("out")
                 if comp.method == "aot":
                     r["compile_s"] = comp.compile_ms / 1e3

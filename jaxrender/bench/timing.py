@@ -12,7 +12,7 @@ import json
 import platform
 import statistics
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import jax
 
@@ -43,7 +43,7 @@ def memory_analysis(compiled) -> dict:
     """Bytes the compiled program asks for (arguments, outputs, temporaries), where known."""
     try:
         m = compiled.memory_analysis()
-    except Exception:  # not every backend implements it
+    except Exception:  # noqa: BLE001 - not every backend implements it
         return {}
     if m is None:
         return {}
@@ -100,9 +100,11 @@ def peak_memory() -> dict:
     the largest of everything run before it too."""
     try:
         s = jax.devices()[0].memory_stats() or {}
-    except Exception:
+    except Exception:  # noqa: BLE001 - no statistics on this backend
         s = {}
-    mib = lambda k: (s[k] / 2**20) if k in s else None  # noqa: E731
+    def mib(k):
+        return (s[k] / 2**20) if k in s else None
+
     return {"peak_mib": mib("peak_bytes_in_use"), "in_use_mib": mib("bytes_in_use"),
             "limit_mib": mib("bytes_limit")}
 
