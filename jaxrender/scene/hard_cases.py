@@ -57,7 +57,7 @@ def _textures() -> list[np.ndarray]:
     i = np.arange(n) * 8 // n
     mask = ((i[:, None] + i[None, :]) % 2 == 0)[..., None]
     checker = np.where(mask, [0.8, 0.8, 0.8], [0.15, 0.15, 0.2])
-    noise = np.random.default_rng(10).uniform(0.0, 1.0, (n, n, 3))
+    noise = np.random.default_rng(10).integers(0, 2, (n, n, 3)).astype(np.float64)  # 0 or 1
     one = np.ones((n, n, 1))
     return [np.concatenate([checker, one], -1), np.concatenate([noise, one], -1)]
 
@@ -406,11 +406,12 @@ def flat() -> Scene:
 
 
 def noise() -> Scene:
-    """A wall with a white-noise texture at about one texel per pixel (DACS: every block
-    dissimilar, interpolation should fall back to shading nearly everything).
+    """A wall with a binary white-noise texture magnified to about 2 pixels per texel, so the
+    MIP filter cannot average it away (DACS: neighbours dissimilar nearly everywhere, so it must
+    fall back to shading nearly every pixel rather than interpolate noise).
 
     Must hold: finite, error in bound."""
-    wall = _backdrop(material=3, uv_scale=(1.0, 1.0))
+    wall = _backdrop(material=3, uv_scale=(0.5, 0.5))
     return _scene("hard_noise", [wall], _camera(), doc=noise.__doc__)
 
 
@@ -458,28 +459,30 @@ def _c(fn, bound, **kw) -> HardCase:
     return HardCase(f"hard_{fn.__name__}", fn, bound, **kw)
 
 
-# Bounds: measured worst pipeline at 24x16 against reference k=4 (studies/hard_cases_table.py),
-# then the next round number above 1.5x of it; see tests/hard_cases/README.md.
+# Bounds: the worst pipeline measured at 24x16 against the reference at k = 4 (forward,
+# deferred, visbuffer, checkerboard, dacs, object_space; python benchmarks/bench_hard_cases.py,
+# 2026-11-22, CPU) times 1.5, rounded up. The 1-bit-exact cases (flat, empty) state their
+# exact expectation. noise (changed after that run) and tiny_image keep provisional bounds.
 CASES: dict[str, HardCase] = {c.name: c for c in (
-    _c(degenerate, 0.20),
-    _c(sliver, 0.20),
-    _c(subpixel, 0.20),
-    _c(near_plane, 0.20),
-    _c(w_near_zero, 0.20),
-    _c(far_1e5, 0.20),
-    _c(far_1e7, 0.20),
-    _c(far_origin, 0.20),
-    _c(coplanar, 0.20),
-    _c(fov_1, 0.20),
-    _c(fov_170, 0.20),
-    _c(grazing, 0.20),
-    _c(phong_1e4, 0.20),
-    _c(phong_1e6, 0.20),
-    _c(bad_normals, 0.20),
-    _c(zero_area_uv, 0.20),
-    _c(minify, 0.20),
-    _c(magnify, 0.20),
-    _c(flat, 0.0, constant=True),
+    _c(degenerate, 0.15),
+    _c(sliver, 0.14),
+    _c(subpixel, 0.15),
+    _c(near_plane, 0.09),
+    _c(w_near_zero, 0.1),
+    _c(far_1e5, 0.15),
+    _c(far_1e7, 0.15),
+    _c(far_origin, 0.15),
+    _c(coplanar, 0.19),
+    _c(fov_1, 0.13),
+    _c(fov_170, 0.011),
+    _c(grazing, 0.025),
+    _c(phong_1e4, 0.14),
+    _c(phong_1e6, 0.14),
+    _c(bad_normals, 0.14),
+    _c(zero_area_uv, 0.04),
+    _c(minify, 0.02),
+    _c(magnify, 1e-05),
+    _c(flat, 1e-6, constant=True),
     _c(noise, 0.30),
     _c(empty, 0.0, empty=True),
     _c(tiny_image, 0.20, resolutions=((1, 16), (4096, 1))),
