@@ -462,7 +462,7 @@ def _c(fn, bound, **kw) -> HardCase:
 # Bounds: the worst pipeline measured at 24x16 against the reference at k = 4 (forward,
 # deferred, visbuffer, checkerboard, dacs, object_space; python benchmarks/bench_hard_cases.py,
 # 2026-11-22, CPU) times 1.5, rounded up. The 1-bit-exact cases (flat, empty) state their
-# exact expectation. noise (changed after that run) and tiny_image keep provisional bounds.
+# exact expectation. noise measured after (worst: dacs 0.155); tiny_image is provisional.
 CASES: dict[str, HardCase] = {c.name: c for c in (
     _c(degenerate, 0.15),
     _c(sliver, 0.14),
@@ -483,7 +483,7 @@ CASES: dict[str, HardCase] = {c.name: c for c in (
     _c(minify, 0.02),
     _c(magnify, 1e-05),
     _c(flat, 1e-6, constant=True),
-    _c(noise, 0.30),
+    _c(noise, 0.24),
     _c(empty, 0.0, empty=True),
     _c(tiny_image, 0.20, resolutions=((1, 16), (4096, 1))),
 )}
