@@ -172,6 +172,12 @@ def cmd_reference(a) -> int:
     return 0
 
 
+def cmd_bench(a) -> int:
+    from jaxrender.bench import run
+
+    return run(a)
+
+
 # ------------------------------------------------------------------ the parser
 
 
@@ -224,6 +230,15 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", required=True, help="the PNG to write")
     s.add_argument("--json", action="store_true", help="print the counts as JSON")
     s.set_defaults(fn=cmd_render)
+
+    from jaxrender.bench import add_arguments as bench_arguments  # argparse only, no jax
+
+    s = sub.add_parser("bench", help="time the rasterizer, pipelines and metrics", description=(
+        "Rasterizer throughput against triangle count and resolution, each pipeline's frame "
+        "time on each built-in scene, metric times, compile times apart and peak device "
+        "memory: markdown tables on stdout, every row in --json."))
+    bench_arguments(s)
+    s.set_defaults(fn=cmd_bench)
 
     s = sub.add_parser("reference", help="manage the reference cache", description=(
         "The reference cache ($JAXRENDER_CACHE or ~/.cache/jaxrender/reference)."))
