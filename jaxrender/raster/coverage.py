@@ -70,8 +70,9 @@ def _chunk(setup: TriSetup, incl: Array, base: Array, capacity: int, offset: Arr
     sy = (py * SUBPIXEL).astype(jnp.float64) + offset[1].astype(jnp.float64)
     e = setup.edge_a[slot] * sx[:, None] + setup.edge_b[slot] * sy[:, None] + setup.edge_c[slot]
     covered = live & jnp.all(e + setup.top_left[slot] > 0, axis=1)
-    lam = e.astype(jnp.float32) * setup.inv_area[slot][:, None]
-    depth = jnp.clip(jnp.sum(lam * setup.z[slot], axis=1), 0.0, 1.0)
+    plane = setup.depth_plane[slot]
+    depth = plane[:, 0] * sx + plane[:, 1] * sy + plane[:, 2]
+    depth = jnp.clip(depth, 0.0, 1.0).astype(jnp.float32)
     return WorkChunk(slot, setup.tri[slot], px, py, covered, depth)
 
 

@@ -130,12 +130,6 @@ def test_coplanar_overlap_has_a_deterministic_winner():
     np.testing.assert_array_equal(ids, again, err_msg="rerun")
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "raster/coverage.py:74 interpolates depth as sum(lam * z) with float32 lam whose sum is not "
-    "exactly 1, so a screen-parallel (constant-depth) triangle gets depths that differ in the "
-    "last bit between triangles and overlapping coplanar quads z-fight by rounding instead of "
-    "the documented lowest-index tie rule; a plane equation z0 + dz/dx x + dz/dy y would be "
-    "exact for constant z"))
 def test_screen_parallel_coplanar_overlap_goes_to_the_lowest_index():
     _, ids, lowest, has = _coplanar()
     np.testing.assert_array_equal(ids[has], lowest[has], err_msg="tie winner")
