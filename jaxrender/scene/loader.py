@@ -26,8 +26,11 @@ def load_scene(name_or_path: str | Path, *, effects: dict | None = None,
     rendered here (``jaxrender.shading.with_shadow_map``), so ``shade`` can use it at once.
     """
     key = str(name_or_path)
-    if key in BUILTINS:
-        scene = builtin_scene(key, **size_params)
+    from jaxrender.scene.hard_cases import HARD_SCENES  # the hard-case catalogue (issue 10)
+
+    if key in BUILTINS or key in HARD_SCENES:
+        build = builtin_scene if key in BUILTINS else (lambda k, **kw: HARD_SCENES[k](**kw))
+        scene = build(key, **size_params)
         if effects:
             scene = with_effects(scene, **effects)
     else:

@@ -75,7 +75,9 @@ def builtin_scenes() -> list[tuple[str, str]]:
 
 
 def builtin_scene_names() -> list[str]:
-    return [name for name, _ in builtin_scenes()]
+    from jaxrender.scene.hard_cases import HARD_SCENES
+
+    return [name for name, _ in builtin_scenes()] + list(HARD_SCENES)
 
 
 def scene_params(name: str) -> dict | None:
@@ -84,7 +86,9 @@ def scene_params(name: str) -> dict | None:
         from jaxrender.scene.builtin import BUILTINS
     except ImportError:
         return None
-    fn = BUILTINS.get(name)
+    from jaxrender.scene.hard_cases import HARD_SCENES
+
+    fn = BUILTINS.get(name) or HARD_SCENES.get(name)
     if fn is None:
         return None
     return {p.name: p.default for p in inspect.signature(fn).parameters.values()
