@@ -9,6 +9,7 @@ resolved config), ``environment.json`` (device, jax version, code version), ``su
 from __future__ import annotations
 
 import json
+import os
 import math
 import re
 import time
@@ -114,13 +115,35 @@ def _seq(study: Study, spec, path, variant) -> str:
     )
 
 
-def run_sequence(study: Study, scene, spec, path, cams, variant, refs, env, out_dir: Path,
-                 progress=None) -> list[dict]:
-    """Render, time and score one sequence; returns its rows (not yet stored)."""
+# Programs compiled side by side before a scene's sequences are timed (never during timing).
+# compile_ms is then the wall time of a compile that shared the machine with this many others;
+# the rows carry the number as compile_workers.
+COMPILE_WORKERS = max(1, min(2, os.cpu_count() or 1))
+
+
+def compile_variant(study: Study, scene, camera, variant) -> timing.Compiled:
     w, h = study.resolution
     pipe = backend.pipeline(variant.type)
     cfg = backend.make_config(variant.type, w, h, dict(variant.params))
-    comp = timing.compile_render(pipe.render, scene, cams[0], cfg)
+    return timing.compile_render(pipe.render, scene, camera, cfg)
+
+
+def compile_ahead(study: Study, scene, camera, variants, workers: int):
+    """Start compiling every variant in a thread pool (XLA compiles outside the GIL, so two
+    cores compile two programs at once). Returns (pool, {variant label: future}). Nothing is
+    timed while the pool works: the caller waits for it before the first timed render."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(max_workers=workers)
+    futures = {v.label: pool.submit(compile_variant, study, scene, camera, v) for v in variants}
+    return pool, futures
+
+
+def run_sequence(study: Study, scene, spec, path, cams, variant, refs, env, out_dir: Path,
+                 progress=None, compiled: timing.Compiled | None = None) -> list[dict]:
+    """Render, time and score one sequence; returns its rows (not yet stored)."""
+    w, h = study.resolution
+    comp = compiled or compile_variant(study, scene, cams[0], variant)
     first_ms = None
     if comp.method == "first_call":
         t0 = time.perf_counter()
@@ -148,7 +171,8 @@ def run_sequence(study: Study, scene, spec, path, cams, variant, refs, env, out_
             "pipeline": variant.label, "pipeline_type": variant.type,
             "params": dict(variant.params), "frame": t, "width": w, "height": h,
             **metrics, **counts, "time_ms": ms, "compile_ms": comp.compile_ms,
-            "compile_method": comp.method, "finite": finite, **env,
+            "compile_method": comp.method, "compile_workers": COMPILE_WORKERS, "finite": finite,
+            **env,
         }
         if "convergence_psnr" in refs[t]:
             row["reference_convergence_psnr"] = float(refs[t]["convergence_psnr"])
@@ -293,12 +317,18 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
                 if not variants:
                     continue
                 cams = backend.make_cameras(scene, path, *study.resolution)
-                bar.set_description(f"{spec.label}/{path.name}: reference")
-                refs = reference_frames(scene, spec, cams, study.reference, study.resolution)
+                bar.set_description(f"{spec.label}/{path.name}: compiling, reference")
+                pool, futures = compile_ahead(study, scene, cams[0], variants, COMPILE_WORKERS)
+                try:
+                    refs = reference_frames(scene, spec, cams, study.reference,
+                                            study.resolution)
+                    compiled = {label: f.result() for label, f in futures.items()}
+                finally:
+                    pool.shutdown(wait=True, cancel_futures=True)
                 for v in variants:
                     bar.set_description(f"{spec.label}/{path.name}: {v.label}")
                     rows = run_sequence(study, scene, spec, path, cams, v, refs, env, out_dir,
-                                        progress=bar)
+                                        progress=bar, compiled=compiled[v.label])
                     st.append(rows)
     finally:
         bar.close()
