@@ -31,7 +31,7 @@ from jaxrender.pipelines.dispatch import shade_pixels
 from jaxrender.pipelines.registry import RenderConfig, register
 from jaxrender.raster.coverage import EMPTY_KEY, depth_key
 from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
-from jaxrender.raster.resolve import resolve
+from jaxrender.raster.resolve import barycentrics_at, resolve
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.camera import Camera, world_to_clip
 from jaxrender.scene.scene import Scene
@@ -68,33 +68,8 @@ class ReferenceConfig(RenderConfig):
 
 
 def _bary_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, w: int, h: int):
-    """Perspective-correct barycentrics float32[N, 3] and their derivatives per pixel at window
-    points (x, y) float32[N] of triangles int32[N]: the algebra of ``raster.resolve``, per
-    point instead of per pixel centre (adjugate rows of the clip-space (x, y, w) columns)."""
-    verts = clip[faces[tri]]  # [N, 3, 4]
-    cx, cy, cw = ([verts[:, i, c] for i in range(3)] for c in (0, 1, 3))
-    u = x * (2.0 / w) - 1.0
-    v = 1.0 - y * (2.0 / h)
-    ru, rv, e = [], [], []
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        ra = cy[j] * cw[k] - cw[j] * cy[k]
-        rb = cw[j] * cx[k] - cx[j] * cw[k]
-        rc = cx[j] * cy[k] - cy[j] * cx[k]
-        ru.append(ra)
-        rv.append(rb)
-        e.append(ra * u + rb * v + rc)
-    s = e[0] + e[1] + e[2]
-    ok = (s != 0.0) & jnp.isfinite(s)
-    s = jnp.where(ok, s, 1.0)
-    su, sv = ru[0] + ru[1] + ru[2], rv[0] + rv[1] + rv[2]
-    b = [ei / s for ei in e]
-    bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
-    norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
-    bary = jnp.stack([jnp.where(ok, bi / norm, jnp.float32(1.0 / 3.0)) for bi in bc], axis=-1)
-    ddx = jnp.stack([jnp.where(ok, (ru[i] - b[i] * su) / s * (2.0 / w), 0.0) for i in range(3)], -1)
-    ddy = jnp.stack([jnp.where(ok, (rv[i] - b[i] * sv) / s * (-2.0 / h), 0.0) for i in range(3)],
-                    -1)
+    """Barycentrics and their per-pixel derivatives at window points: the rasterizer's own."""
+    bary, ddx, ddy, _ = barycentrics_at(tri, x, y, clip, faces, w, h)
     return bary, ddx, ddy
 
 

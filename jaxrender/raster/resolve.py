@@ -30,46 +30,60 @@ def resolve(
     return VisBuffer(tri_id=tri, depth=depth, bary=bary, dbary_dx=ddx, dbary_dy=ddy)
 
 
-def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int, offset_px: Array):
-    """Perspective-correct barycentrics and d/dx, d/dy for int32[H, W] triangle ids.
+def barycentrics_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, width: int,
+                    height: int):
+    """Perspective-correct barycentrics [..., 3] and their derivatives per pixel (right, down)
+    at window points (x, y) (float32, any shape, pixel centres at +0.5) of valid triangles
+    ``tri`` (int32, same shape). Clamped into the triangle and renormalised; where the point's
+    homogeneous weights vanish the barycentrics are 1/3 and the derivatives 0. Returns
+    (bary, d/dx, d/dy, ok).
 
     Written as explicit scalar algebra on the nine gathered (x, y, w) values so that XLA fuses
-    the whole resolve into one pass over the pixels.
+    it into one pass.
     """
-    covered = tri >= 0
-    verts = clip[faces[jnp.maximum(tri, 0)]]  # [H, W, 3, 4]
-    x = [verts[..., i, 0] for i in range(3)]
-    y = [verts[..., i, 1] for i in range(3)]
-    w = [verts[..., i, 3] for i in range(3)]
-    px = jnp.arange(width, dtype=jnp.float32)[None, :] + offset_px[0]
-    py = jnp.arange(height, dtype=jnp.float32)[:, None] + offset_px[1]
-    u = jnp.broadcast_to(px * (2.0 / width) - 1.0, (height, width))
-    v = jnp.broadcast_to(1.0 - py * (2.0 / height), (height, width))
+    verts = clip[faces[tri]]  # [..., 3, 4]
+    cx = [verts[..., i, 0] for i in range(3)]
+    cy = [verts[..., i, 1] for i in range(3)]
+    cw = [verts[..., i, 3] for i in range(3)]
+    u = x * (2.0 / width) - 1.0
+    v = 1.0 - y * (2.0 / height)
     # Rows of the adjugate: row_i = c_j x c_k for (i, j, k) cyclic, c = (x, y, w).
-    ru, rv, r1, e = [], [], [], []
+    ru, rv, e = [], [], []
     for i in range(3):
         j, k = (i + 1) % 3, (i + 2) % 3
-        a = y[j] * w[k] - w[j] * y[k]
-        b = w[j] * x[k] - x[j] * w[k]
-        c = x[j] * y[k] - y[j] * x[k]
+        a = cy[j] * cw[k] - cw[j] * cy[k]
+        b = cw[j] * cx[k] - cx[j] * cw[k]
+        c = cx[j] * cy[k] - cy[j] * cx[k]
         ru.append(a)
         rv.append(b)
-        r1.append(c)
         e.append(a * u + b * v + c)
     s = e[0] + e[1] + e[2]
-    ok = covered & (s != 0.0) & jnp.isfinite(s)
+    ok = (s != 0.0) & jnp.isfinite(s)
     s = jnp.where(ok, s, 1.0)
     su, sv = ru[0] + ru[1] + ru[2], rv[0] + rv[1] + rv[2]
     b = [ei / s for ei in e]
-    dbx = [(ru[i] - b[i] * su) / s * (2.0 / width) for i in range(3)]
-    dby = [(rv[i] - b[i] * sv) / s * (-2.0 / height) for i in range(3)]
     # Clamp into the triangle: a pixel centre can fall a rounding error outside it.
     bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
     norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
     third = jnp.float32(1.0 / 3.0)
-    bary = jnp.stack(
-        [jnp.where(ok, bi / norm, jnp.where(covered, third, 0.0)) for bi in bc], axis=-1
+    bary = jnp.stack([jnp.where(ok, bi / norm, third) for bi in bc], axis=-1)
+    ddx = jnp.stack(
+        [jnp.where(ok, (ru[i] - b[i] * su) / s * (2.0 / width), 0.0) for i in range(3)], -1
     )
-    ddx = jnp.stack([jnp.where(ok, d, 0.0) for d in dbx], axis=-1)
-    ddy = jnp.stack([jnp.where(ok, d, 0.0) for d in dby], axis=-1)
-    return bary, ddx, ddy
+    ddy = jnp.stack(
+        [jnp.where(ok, (rv[i] - b[i] * sv) / s * (-2.0 / height), 0.0) for i in range(3)], -1
+    )
+    return bary, ddx, ddy, ok
+
+
+def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int, offset_px: Array):
+    """Barycentrics and d/dx, d/dy for int32[H, W] triangle ids (-1: empty, all zeros) at the
+    sample point ``offset_px`` inside each pixel."""
+    covered = tri >= 0
+    x = jnp.broadcast_to(jnp.arange(width, dtype=jnp.float32)[None, :] + offset_px[0],
+                         (height, width))
+    y = jnp.broadcast_to(jnp.arange(height, dtype=jnp.float32)[:, None] + offset_px[1],
+                         (height, width))
+    bary, ddx, ddy, _ = barycentrics_at(jnp.maximum(tri, 0), x, y, clip, faces, width, height)
+    c = covered[..., None]
+    return jnp.where(c, bary, 0.0), jnp.where(c, ddx, 0.0), jnp.where(c, ddy, 0.0)
