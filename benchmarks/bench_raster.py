@@ -60,9 +60,8 @@ def _brute_chunk(zbuf, s, sx, sy):
     e = (s.edge_a[:, None, :] * sx[None, :, None] + s.edge_b[:, None, :] * sy[None, :, None]
          + s.edge_c[:, None, :])
     inside = jnp.all(e + s.top_left[:, None, :] > 0, axis=-1) & (s.count[:, None] > 0)
-    plane = s.depth_plane[:, None, :]
-    depth = plane[..., 0] * sx[None, :] + plane[..., 1] * sy[None, :] + plane[..., 2]
-    depth = jnp.clip(depth, 0.0, 1.0).astype(jnp.float32)
+    lam = e.astype(jnp.float32) * s.inv_area[:, None, None]
+    depth = jnp.clip(jnp.sum(lam * s.z[:, None, :], -1), 0.0, 1.0)
     bits = jax.lax.bitcast_convert_type(depth, jnp.int32).astype(jnp.int64)
     key = jnp.where(inside, (bits << 32) | s.tri[:, None].astype(jnp.int64), jnp.iinfo(jnp.int64).max)
     return jnp.minimum(zbuf, jnp.min(key, axis=0))

@@ -70,9 +70,13 @@ def _chunk(setup: TriSetup, incl: Array, base: Array, capacity: int, offset: Arr
     sy = (py * SUBPIXEL).astype(jnp.float64) + offset[1].astype(jnp.float64)
     e = setup.edge_a[slot] * sx[:, None] + setup.edge_b[slot] * sy[:, None] + setup.edge_c[slot]
     covered = live & jnp.all(e + setup.top_left[slot] > 0, axis=1)
-    plane = setup.depth_plane[slot]
-    depth = plane[:, 0] * sx + plane[:, 1] * sy + plane[:, 2]
-    depth = jnp.clip(depth, 0.0, 1.0).astype(jnp.float32)
+    z = setup.z[slot]
+    lam = e.astype(jnp.float32) * setup.inv_area[slot][:, None]
+    # A constant-depth triangle takes its vertex depth exactly: float32 barycentrics need not
+    # sum to 1, and rounding must not decide between coplanar triangles (the id does).
+    flat = (z[:, 0] == z[:, 1]) & (z[:, 1] == z[:, 2])
+    depth = jnp.where(flat, z[:, 0], jnp.sum(lam * z, axis=1))
+    depth = jnp.clip(depth, 0.0, 1.0)
     return WorkChunk(slot, setup.tri[slot], px, py, covered, depth)
 
 

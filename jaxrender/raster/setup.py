@@ -39,8 +39,8 @@ class TriSetup:
     edge_b: Array  # float64[N, 3] oriented so that the interior is positive (integer values)
     edge_c: Array  # float64[N, 3]
     top_left: Array  # float64[N, 3] 1 where the edge is top or left (E == 0 counts as covered)
-    depth_plane: Array  # float64[N, 3] (a, b, c): window depth = a Px + b Py + c (exact for
-    #                     constant depth, so coplanar ties fall to the id, never to rounding)
+    z: Array  # float32[N, 3] window depth of the vertices
+    inv_area: Array  # float32[N] 1 / (2 * area) in fixed-point units
     x0: Array  # int32[N] first pixel column of the bounding box (for this sample offset)
     y0: Array  # int32[N]
     bw: Array  # int32[N] bounding box width in pixels (>= 1)
@@ -100,22 +100,14 @@ def setup_triangles(
     if cull_backfaces:
         keep = keep & (area2 < 0)
     count = jnp.where(keep, bw.astype(jnp.int64) * bh.astype(jnp.int64), 0)
-    # Depth plane from the (interior-positive) edge functions: z = sum_i E_i z_i / |area2|.
-    # Each A_i z_i is exact in float64, and sum_i A_i = sum_i B_i = 0, so a constant-depth
-    # triangle gets a = b = 0 exactly and c = z.
-    zd = z.astype(jnp.float64)
-    area = jnp.where(keep, jnp.abs(area2), 1.0)
-    plane_a = jnp.sum(edge_a * zd, axis=1) / area
-    plane_b = jnp.sum(edge_b * zd, axis=1) / area
-    flat = (zd[:, 0] == zd[:, 1]) & (zd[:, 1] == zd[:, 2])
-    plane_c = jnp.where(flat, zd[:, 0], jnp.sum(edge_c * zd, axis=1) / area)
-    depth_plane = jnp.stack([plane_a, plane_b, plane_c], axis=1)
+    inv_area = 1.0 / jnp.abs(area2).astype(jnp.float32)
     return TriSetup(
         edge_a=edge_a,
         edge_b=edge_b,
         edge_c=edge_c,
         top_left=top_left,
-        depth_plane=jnp.where(keep[:, None], depth_plane, 0.0),
+        z=z,
+        inv_area=jnp.where(keep, inv_area, 0.0),
         x0=x0.astype(jnp.int32),
         y0=y0.astype(jnp.int32),
         bw=jnp.maximum(bw, 1),
