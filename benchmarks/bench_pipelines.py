@@ -10,27 +10,14 @@ with the device and JAX version, and the shading counts beside the times.
 from __future__ import annotations
 
 import argparse
-import tomllib
 
+from jaxrender.bench.pipelines import parse_spec as parse_variant
 from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.scene import load_scene
 from jaxrender.study.timing import compile_render, device_info, time_call
 
 DEFAULT_VARIANTS = ("forward", "forward:z_prepass=true", "deferred", "visbuffer",
                     "visbuffer:vrs=fixed")
-
-
-def parse_variant(text: str) -> tuple[str, dict]:
-    """'name:k=v,k=v' with TOML values (bare words are strings)."""
-    name, _, rest = text.partition(":")
-    params = {}
-    for item in filter(None, rest.split(",")):
-        k, _, v = item.partition("=")
-        try:
-            params[k.strip()] = tomllib.loads(f"v = {v}")["v"]
-        except tomllib.TOMLDecodeError:
-            params[k.strip()] = v
-    return name, params
 
 
 def main(argv=None) -> None:

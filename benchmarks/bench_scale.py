@@ -11,9 +11,7 @@ whether the batched frames equal the frame-by-frame ones.
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 
 import jax
 import jax.numpy as jnp
@@ -22,22 +20,16 @@ import numpy as np
 from jaxrender import parallel
 from jaxrender.bench.raster import terrain_camera
 from jaxrender.bench.timing import dump, environment, print_table
+from jaxrender.bench.timing import time_first_call
 from jaxrender.raster import rasterize
 from jaxrender.raster.test_meshes import terrain
 from jaxrender.scene.camera_path import frame, orbit
 
 
 def _time(call, repeats):
-    t0 = time.perf_counter()
-    out = jax.block_until_ready(call())
-    first = time.perf_counter() - t0
-    samples = []
-    for _ in range(max(1, repeats)):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(call())
-        samples.append(time.perf_counter() - t0)
-    med = statistics.median(samples)
-    return out, med, max(first - med, 0.0)
+    """(output, steady median in s, first call minus median in s): jaxrender.bench's timing."""
+    r = time_first_call(call, repeats)
+    return r["out"], r["median_ms"] / 1e3, r["compile_s"]
 
 
 def _compare(batched, frames) -> dict:
