@@ -204,10 +204,12 @@ def room(*, texture_size: int = 128, sphere_detail: int = 16) -> Scene:
                        description=room.__doc__.splitlines()[0])
 
 
-def many_small(*, n_triangles: int = 20_000, size: float = 4.0) -> Scene:
+def many_small(*, n_triangles: int = 20_000, size: float = 4.0, point_lights: int = 0) -> Scene:
     """A dune surface of n_triangles tiny triangles for scale (large: n_triangles=1_048_576).
 
-    At the large setting the triangles are sub-pixel at 1920x1080 from the default camera."""
+    At the large setting the triangles are sub-pixel at 1920x1080 from the default camera.
+    ``point_lights`` adds that many coloured point lights in a ring above the dunes (issue 11's
+    target scene is n_triangles=100000, point_lights=4)."""
     q = max(int(np.sqrt(n_triangles / 2)), 1)
     nx, nz = q, max(int(np.ceil(n_triangles / (2 * q))), 1)
     plane = grid_plane((size, size * nz / nx), (nx, nz))
@@ -217,7 +219,10 @@ def many_small(*, n_triangles: int = 20_000, size: float = 4.0) -> Scene:
     mats = [Material("sand", albedo=(0.8, 0.7, 0.5), specular=(0.2,) * 3, shininess=16,
                      brdf="blinn_phong")]
     cam = look_at((0, 2.5, size * 0.9), (0, 0, 0), fov_y_deg=50)
-    return build_scene([plane], mats, [], make_lights([_SUN], ambient=0.1), cam,
+    ring = [((0.35 * size * np.cos(a), 0.6, 0.35 * size * np.sin(a)),
+             (1.0 + 0.5 * np.cos(a), 1.0, 1.0 + 0.5 * np.sin(a)))
+            for a in 2 * np.pi * np.arange(int(point_lights)) / max(int(point_lights), 1)]
+    return build_scene([plane], mats, [], make_lights([_SUN], ring, ambient=0.1), cam,
                        name="many_small", description=many_small.__doc__.splitlines()[0])
 
 

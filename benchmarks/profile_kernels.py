@@ -1,0 +1,137 @@
+"""Where a compiled program spends its time, kernel by kernel, from JAX's own profiler trace.
+
+    python benchmarks/profile_kernels.py raster --resolution 1920x1080 --triangles 2600000
+    python benchmarks/profile_kernels.py deferred --scene terrain --resolution 1920x1080
+    python benchmarks/profile_kernels.py deferred --set chunk=65536
+
+Traces a few steady-state calls (``jax.profiler.trace``), reads the XSpace back in-process
+(``jax.profiler.ProfileData``, no TensorBoard needed) and prints, per call: the wall time, the
+summed kernel time, the number of kernels launched and the kernels that took the most time. On a
+GPU the events are the device's kernels; on a CPU, XLA's thunks on its worker threads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import glob
+import os
+import sys
+import tempfile
+import time
+
+import jax
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+_HOST_NOISE = ("ThreadpoolListener", "end: ", "ThunkExecutor", "$", "PjitFunction")
+
+
+def kernel_events(xplane_path: str) -> list[tuple[str, float]]:
+    """(name, duration in microseconds) of every kernel (GPU) or XLA thunk (CPU) in a trace."""
+    from jax.profiler import ProfileData
+
+    data = ProfileData.from_file(xplane_path)
+    gpu = [p for p in data.planes if p.name.startswith("/device:GPU")]
+    out = []
+    if gpu:
+        for plane in gpu:
+            for line in plane.lines:
+                # The "XLA Ops"/"XLA Modules" lines repeat the kernels at a coarser level.
+                if "stream" not in line.name.lower():
+                    continue
+                out += [(e.name, e.duration_ns / 1e3) for e in line.events]
+        return out
+    for plane in data.planes:
+        if plane.name != "/host:CPU":
+            continue
+        for line in plane.lines:
+            if not line.name.startswith("tf_XLA"):
+                continue
+            out += [(e.name, e.duration_ns / 1e3) for e in line.events
+                    if not e.name.startswith(_HOST_NOISE)]
+    return out
+
+
+def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "") -> dict:
+    """Trace ``calls`` steady-state calls of ``fn(*args)`` and print the kernel table."""
+    jax.block_until_ready(fn(*args))  # compile and warm up outside the trace
+    jax.block_until_ready(fn(*args))
+    t0 = time.perf_counter()
+    for _ in range(calls):
+        jax.block_until_ready(fn(*args))
+    wall_ms = (time.perf_counter() - t0) / calls * 1e3
+    with tempfile.TemporaryDirectory() as d:
+        with jax.profiler.trace(d):
+            for _ in range(calls):
+                jax.block_until_ready(fn(*args))
+        (path,) = glob.glob(os.path.join(d, "**", "*.xplane.pb"), recursive=True)
+        events = kernel_events(path)
+    total = collections.defaultdict(float)
+    count = collections.Counter()
+    for name, us in events:
+        total[name] += us
+        count[name] += 1
+    kernel_ms = sum(total.values()) / calls / 1e3
+    print(f"\n## {label}: wall {wall_ms:.3f} ms/call (untraced), kernels {kernel_ms:.3f} ms/call, "
+          f"{len(events) / calls:.0f} launches/call")
+    print("| kernel | ms/call | launches/call |\n|---|---:|---:|")
+    for name, us in sorted(total.items(), key=lambda kv: -kv[1])[:top]:
+        print(f"| {name[:70]} | {us / calls / 1e3:.3f} | {count[name] / calls:.0f} |")
+    return {"label": label, "wall_ms": wall_ms, "kernel_ms": kernel_ms,
+            "launches": len(events) / calls,
+            "top": sorted(((n, t / calls / 1e3, count[n] / calls) for n, t in total.items()),
+                          key=lambda r: -r[1])[:top]}
+
+
+def _value(text: str):
+    for cast in (int, float):
+        try:
+            return cast(text)
+        except ValueError:
+            pass
+    return {"true": True, "false": False}.get(text.lower(), text)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("what", help="'raster' or a pipeline name (forward, deferred, ...)")
+    ap.add_argument("--resolution", default="1920x1080")
+    ap.add_argument("--triangles", type=int, default=164_000, help="terrain size for 'raster'")
+    ap.add_argument("--scene", default="terrain",
+                    help="scene for a pipeline, 'name' or 'name:key=value,...'")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="pipeline config override, e.g. chunk=65536")
+    ap.add_argument("--calls", type=int, default=5)
+    ap.add_argument("--top", type=int, default=15)
+    args = ap.parse_args(argv)
+    w, h = (int(v) for v in args.resolution.lower().split("x"))
+    print(f"device: {jax.devices()[0].device_kind}, jax {jax.__version__}")
+    if args.what == "raster":
+        from bench_raster import scene, static_args
+
+        from jaxrender.raster.rasterize import _rasterize
+
+        clip, faces = scene(args.triangles, w, h)
+        fn = jax.jit(lambda c, f: _rasterize(c, f, **static_args(faces.shape[0], w, h)))
+        profile_call(fn, clip, faces, calls=args.calls, top=args.top,
+                     label=f"raster {w}x{h} {faces.shape[0]} triangles")
+        return 0
+    from jaxrender.bench.pipelines import parse_spec
+    from jaxrender.pipelines import get_pipeline, make_config
+    from jaxrender.scene import default_camera, load_scene
+
+    name, params = parse_spec(args.scene)
+    sc = load_scene(name, **params)
+    cam = default_camera(sc)
+    pipe = get_pipeline(args.what)
+    cfg = make_config(args.what, width=w, height=h,
+                      **{k: _value(v) for k, v in (kv.split("=", 1) for kv in args.set)})
+    fn = getattr(pipe.render, "jitted", pipe.render)
+    profile_call(lambda s, c: fn(s, c, cfg), sc, cam, calls=args.calls, top=args.top,
+                 label=f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
