@@ -27,8 +27,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 _HOST_NOISE = ("ThreadpoolListener", "end: ", "ThunkExecutor", "$", "PjitFunction")
 
 
-def kernel_events(xplane_path: str) -> list[tuple[str, float]]:
-    """(name, duration in microseconds) of every kernel (GPU) or XLA thunk (CPU) in a trace."""
+def kernel_events(xplane_path: str) -> list[tuple[str, float, float]]:
+    """(name, duration us, start us) of every kernel (GPU) or XLA thunk (CPU) in a trace."""
     from jax.profiler import ProfileData
 
     data = ProfileData.from_file(xplane_path)
@@ -40,7 +40,7 @@ def kernel_events(xplane_path: str) -> list[tuple[str, float]]:
                 # The "XLA Ops"/"XLA Modules" lines repeat the kernels at a coarser level.
                 if "stream" not in line.name.lower():
                     continue
-                out += [(e.name, e.duration_ns / 1e3) for e in line.events]
+                out += [(e.name, e.duration_ns / 1e3, e.start_ns / 1e3) for e in line.events]
         return out
     for plane in data.planes:
         if plane.name != "/host:CPU":
@@ -48,8 +48,26 @@ def kernel_events(xplane_path: str) -> list[tuple[str, float]]:
         for line in plane.lines:
             if not line.name.startswith("tf_XLA"):
                 continue
-            out += [(e.name, e.duration_ns / 1e3) for e in line.events
+            out += [(e.name, e.duration_ns / 1e3, e.start_ns / 1e3) for e in line.events
                     if not e.name.startswith(_HOST_NOISE)]
+    return out
+
+
+def hlo_sources(fn, *args) -> dict[str, str]:
+    """Instruction name (dots as underscores, as kernels are named) -> 'scope @ file:line' of
+    the JAX operation it came from, read off the optimized HLO's metadata."""
+    import re
+
+    text = jax.jit(fn).lower(*args).compile().as_text()
+    pat = re.compile(r'^\s*(?:ROOT )?%?([\w.\-]+) = .*?metadata=\{op_name="([^"]*)"'
+                     r'(?: source_file="([^"]*)")?(?: source_line=(\d+))?')
+    out = {}
+    for line in text.splitlines():
+        m = pat.match(line)
+        if m:
+            name, op, src, ln = m.groups()
+            where = f" @ {os.path.basename(src)}:{ln}" if src else ""
+            out[name.replace(".", "_")] = f"{op.split('/', 1)[-1][-60:]}{where}"
     return out
 
 
@@ -69,19 +87,44 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "") -> d
         events = kernel_events(path)
     total = collections.defaultdict(float)
     count = collections.Counter()
-    for name, us in events:
+    span_ms = device_span_ms(events, calls)
+    for name, us, _ in events:
         total[name] += us
         count[name] += 1
     kernel_ms = sum(total.values()) / calls / 1e3
     print(f"\n## {label}: wall {wall_ms:.3f} ms/call (untraced), kernels {kernel_ms:.3f} ms/call, "
-          f"{len(events) / calls:.0f} launches/call")
-    print("| kernel | ms/call | launches/call |\n|---|---:|---:|")
+          f"{len(events) / calls:.0f} launches/call, device span {span_ms:.3f} ms/call "
+          f"(first kernel start to last kernel end; span - kernels = device idle)")
+    try:
+        sources = hlo_sources(fn, *args)
+    except Exception as e:  # noqa: BLE001 - the table is still useful without sources
+        sources = {}
+        print(f"(no HLO sources: {type(e).__name__}: {e})")
+    print("| kernel | ms/call | launches/call | from |\n|---|---:|---:|---|")
     for name, us in sorted(total.items(), key=lambda kv: -kv[1])[:top]:
-        print(f"| {name[:70]} | {us / calls / 1e3:.3f} | {count[name] / calls:.0f} |")
+        print(f"| {name[:48]} | {us / calls / 1e3:.3f} | {count[name] / calls:.0f} | "
+              f"{sources.get(name.replace('.', '_'), '')} |")
     return {"label": label, "wall_ms": wall_ms, "kernel_ms": kernel_ms,
             "launches": len(events) / calls,
             "top": sorted(((n, t / calls / 1e3, count[n] / calls) for n, t in total.items()),
                           key=lambda r: -r[1])[:top]}
+
+
+def device_span_ms(events, calls: int) -> float:
+    """Median over calls of (last kernel end - first kernel start): the calls are told apart
+    by the calls - 1 largest gaps between kernels (each call waits for the previous one)."""
+    import numpy as np
+
+    if not events:
+        return float("nan")
+    ev = sorted((start, start + dur) for _, dur, start in events)
+    starts = np.array([a for a, _ in ev])
+    ends = np.maximum.accumulate(np.array([b for _, b in ev]))
+    gaps = starts[1:] - ends[:-1]
+    cuts = np.sort(np.argsort(gaps)[::-1][: calls - 1]) + 1 if calls > 1 else np.array([], int)
+    bounds = [0, *cuts.tolist(), len(ev)]
+    spans = [ends[b - 1] - starts[a] for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+    return float(np.median(spans)) / 1e3
 
 
 def _value(text: str):

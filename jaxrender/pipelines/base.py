@@ -39,7 +39,9 @@ COUNT_KEYS = INT_COUNTS + FLOAT_COUNTS
 class PipelineConfig(RenderConfig):
     """Settings shared by the raster-based pipelines.
 
-    chunk: lanes per shading dispatch chunk (the DispatchIndirect group size of the work list).
+    chunk: lanes per shading dispatch chunk (the DispatchIndirect group size of the work list);
+        0 (the default) sizes it to the work list (``dispatch.auto_chunk``: about eight
+        chunks for a full screen).
     cull_backfaces: drop back-facing triangles in the rasterizer.
     fragment_capacity: size of the fragment list per sample (0 = 4 x width x height); a frame
         with more fragments reports ``overflow`` and, called eagerly, raises OverflowError.
@@ -50,8 +52,8 @@ class PipelineConfig(RenderConfig):
     fragment_capacity: int = 0
 
     def __post_init__(self):
-        if int(self.chunk) < 1:
-            raise ValueError(f"chunk must be >= 1, got {self.chunk}")
+        if int(self.chunk) < 0:
+            raise ValueError(f"chunk must be >= 0 (0: automatic), got {self.chunk}")
         if int(self.fragment_capacity) < 0:
             raise ValueError(f"fragment_capacity must be >= 0, got {self.fragment_capacity}")
 

@@ -131,7 +131,7 @@ def level_tables(h: int, w: int, spacing: int) -> dict:
 
 def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, covered: Array,
                      threshold: Array, *, spacing: int = 4, luma_kind: str = "simple",
-                     space: str = "display", chunk: int = 4096, warp_width: int = 32,
+                     space: str = "display", chunk: int = 0, warp_width: int = 32,
                      warp_batches: int = 4, border: str = "average"):
     """The DACS plan and reconstruction over any shading function.
 

