@@ -58,7 +58,7 @@ def hlo_sources(fn, *args) -> dict[str, str]:
     the JAX operation it came from, read off the optimized HLO's metadata."""
     import re
 
-    text = jax.jit(fn).lower(*args).compile().as_text()
+    text = fn.lower(*args).compile().as_text()
     pat = re.compile(r'^\s*(?:ROOT )?%?([\w.\-]+) = .*?metadata=\{op_name="([^"]*)"'
                      r'(?: source_file="([^"]*)")?(?: source_line=(\d+))?')
     out = {}
@@ -73,6 +73,7 @@ def hlo_sources(fn, *args) -> dict[str, str]:
 
 def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "") -> dict:
     """Trace ``calls`` steady-state calls of ``fn(*args)`` and print the kernel table."""
+    fn = jax.jit(fn)
     jax.block_until_ready(fn(*args))  # compile and warm up outside the trace
     jax.block_until_ready(fn(*args))
     t0 = time.perf_counter()
@@ -170,9 +171,16 @@ def main(argv=None) -> int:
     pipe = get_pipeline(args.what)
     cfg = make_config(args.what, width=w, height=h,
                       **{k: _value(v) for k, v in (kv.split("=", 1) for kv in args.set)})
+    label = f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}"
+    if args.what == "object_space":  # its charts are built on the host, outside the program
+        from jaxrender.pipelines import object_space
+
+        sheet = object_space.prepare(sc, cfg)
+        profile_call(lambda s, c, sh: object_space._one(s, sh, c, cfg), sc, cam, sheet,
+                     calls=args.calls, top=args.top, label=label)
+        return 0
     fn = getattr(pipe.render, "jitted", pipe.render)
-    profile_call(lambda s, c: fn(s, c, cfg), sc, cam, calls=args.calls, top=args.top,
-                 label=f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}")
+    profile_call(lambda s, c: fn(s, c, cfg), sc, cam, calls=args.calls, top=args.top, label=label)
     return 0
 
 

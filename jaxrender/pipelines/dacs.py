@@ -180,8 +180,9 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     sizes = tab["sizes"]
     warp = dacs_warp.simulate([needs[k, :sizes[k]] for k in range(n_levels_)], warp_width,
                               warp_batches)
-    shaded = jnp.zeros((n_pix + 1,), bool).at[jnp.where(t["live"], t["pix"], n_pix)].set(
-        needs)[:n_pix]
+    # Every pixel is in exactly one level: the live indices are unique (padding is dropped).
+    shaded = jnp.zeros((n_pix,), bool).at[jnp.where(t["live"], t["pix"], n_pix)].set(
+        needs, mode="drop", unique_indices=True)
     counts = {"shade_invocations": inv, "dispatch_lanes": lanes, "dispatch_chunks": chunks,
               "covered_pixels": jnp.sum(covered, dtype=jnp.int32), **warp}
     level = jnp.asarray(level_map(h, w, spacing))

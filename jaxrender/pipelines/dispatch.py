@@ -1,7 +1,7 @@
 """Work lists and chunked dispatch: the one place where shading work is launched.
 
 DESIGN principle 2: a pipeline that shades fewer points must run fewer shader evaluations.
-The points to shade are compacted into a work list (a stable ``nonzero``), and ``shade()`` runs
+The points to shade are compacted into a work list (``compaction.compact_indices``), and ``shade()`` runs
 over it in chunks of a static size inside a ``lax.while_loop`` whose trip count is the number
 of chunks that hold work, like DispatchIndirect: the compiled program evaluates the shader
 ``ceil(n / chunk)`` times, never over the full screen with a mask. Principle 3: the counts
@@ -16,6 +16,7 @@ from typing import Callable
 import jax
 import jax.numpy as jnp
 
+from jaxrender.compaction import compact_indices
 from jaxrender.types import Array
 
 DEFAULT_CHUNK = 0  # auto: see auto_chunk
@@ -42,9 +43,7 @@ def resolve_chunk(chunk: int, capacity: int) -> int:
 
 def compact(active: Array) -> tuple[Array, Array]:
     """Indices of the True entries of bool[N] in order, padded with 0, and their count."""
-    n = jnp.sum(active, dtype=jnp.int32)
-    (idx,) = jnp.nonzero(active, size=active.shape[0], fill_value=0)
-    return idx.astype(jnp.int32), n
+    return compact_indices(active, active.shape[0])
 
 
 def dispatch(

@@ -14,6 +14,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
+from jaxrender.compaction import compact_indices
 from jaxrender.pipelines.os_marking import Footprint, Taps, mark_chunks, raw_lod, taps
 from jaxrender.pipelines.os_sheet import ShadeSheet
 from jaxrender.types import Array
@@ -61,7 +62,7 @@ def allocate(fp: Footprint, sheet: ShadeSheet, capacity: int, bias0: float, bias
     marked = mark_chunks(t, nc)
     rank = jnp.cumsum(marked, dtype=jnp.int32) - 1
     page = jnp.where(marked & (rank < capacity), rank, -1)
-    (ids,) = jnp.nonzero(marked, size=capacity, fill_value=-1)
+    ids, _ = compact_indices(marked, capacity, fill_value=-1)
     n_alloc = jnp.minimum(n, capacity)
-    return Allocation(t, marked, page, ids.astype(jnp.int32), n_alloc, bias, steps,
+    return Allocation(t, marked, page, ids, n_alloc, bias, steps,
                       (n > capacity).astype(jnp.int32))

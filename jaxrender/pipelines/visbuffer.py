@@ -226,8 +226,9 @@ def render(scene, camera, cfg: VisBufferConfig) -> Frame:
         live = m_s != BIG
         start = segment_starts(m_s, r_s, by_s, bx_s) & live
         anchor_sorted = p_s[first_of_segment_index(start)]
-        anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted)
-        is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start)
+        # p_s is a permutation: unique indices let the scatters be plain stores.
+        anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted, unique_indices=True)
+        is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start, unique_indices=True)
         # Waves: coarse pixels of one material and rate, by 8x8 tile of the coarse grid.
         tiles_w = -(-w // TILE)
         tile = (by // TILE) * tiles_w + bx // TILE

@@ -54,7 +54,9 @@ def _chunk(setup: TriSetup, incl: Array, base: Array, capacity: int, offset: Arr
     mark = mark.at[jnp.where(in_chunk, local, capacity)].max(
         jnp.arange(n_slots, dtype=jnp.int32), mode="drop"
     )
-    first = jnp.searchsorted(incl, base, side="right").astype(jnp.int32)
+    # The triangle owning item `base`: searchsorted(incl, base, side="right"), as one reduction
+    # (jnp.searchsorted's default is a loop of ~20 tiny kernels on a GPU).
+    first = jnp.sum(incl <= base, dtype=jnp.int32)
     mark = mark.at[0].max(first)
     slot = jnp.minimum(running_max(mark), n_slots - 1)
 

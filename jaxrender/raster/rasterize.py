@@ -129,8 +129,12 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     def clip_chunk(k, carry):
         st, items = carry
         with jax.named_scope("clip"):
-            sel = crossing & (rank // clip_cap == k)
-            idx = jnp.nonzero(sel, size=clip_cap, fill_value=0)[0]
+            # The crossing triangles of rank k*clip_cap ... (k+1)*clip_cap-1, each written to
+            # its own slot (no jnp.nonzero: its scatter-add contends, see jaxrender.compaction).
+            local = rank - k * clip_cap
+            dest = jnp.where(crossing & (local >= 0) & (local < clip_cap), local, clip_cap)
+            idx = jnp.zeros((clip_cap,), jnp.int32).at[dest].set(
+                ids, mode="drop", unique_indices=True)
             live = jnp.arange(clip_cap) < n_cross - k * clip_cap
             fan, fan_ok = clip_triangles(tri_clip[idx], guard)
             fan_ok = (fan_ok & live[:, None]).reshape(-1)

@@ -1,0 +1,25 @@
+"""Stream compaction: the indices of the True entries of a mask, in order, in a fixed-size list.
+
+``jnp.nonzero(mask, size=n)`` does this with a scatter-add in which every False entry adds to
+the same few addresses; on an H100 that contention cost 5.4 ms for an 8.3M-entry mask
+(2026-11-22, forward pipeline at 1080p). Here each True entry writes its own slot (its rank, a
+prefix sum), so the scatter has unique indices and no contention: O(n) work, two passes.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from jaxrender.types import Array
+
+
+def compact_indices(mask: Array, size: int, fill_value: int = 0) -> tuple[Array, Array]:
+    """(int32[size] indices of the True entries of bool[N] in increasing order, padded with
+    ``fill_value``; their count int32, which may exceed ``size``: entries past it are not
+    listed)."""
+    mask = mask.reshape(-1)
+    rank = jnp.cumsum(mask, dtype=jnp.int32) - 1
+    dest = jnp.where(mask, rank, size)  # size: out of range, dropped
+    idx = jnp.full((size,), fill_value, jnp.int32).at[dest].set(
+        jnp.arange(mask.shape[0], dtype=jnp.int32), mode="drop", unique_indices=True)
+    return idx, jnp.sum(mask, dtype=jnp.int32)
