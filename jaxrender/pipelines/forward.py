@@ -28,6 +28,7 @@ from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of
 from jaxrender.pipelines.registry import register
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.shading import alpha_test, shade
+from jaxrender.sorting import lex_sort
 from jaxrender.types import Frame
 
 WAVE_SIZES = (32, 64)
@@ -72,8 +73,9 @@ def render(scene, camera, cfg: ForwardConfig) -> Frame:
         samp = jnp.concatenate([jnp.full((cap,), s, jnp.int32) for s in range(n_s)])
         skey = jnp.where(valid, samp, n_s)
         # Draw order: per (sample, pixel), triangles in submission order; empty entries last.
-        skey, pixel, tri, depth = jax.lax.sort(
-            (skey, cat("pixel"), cat("tri"), cat("depth")), num_keys=3)
+        n_tris = scene.faces.shape[0]
+        (skey, pixel, tri), (depth,) = lex_sort(
+            (skey, cat("pixel"), cat("tri")), (n_s, n_pix - 1, n_tris - 1), (cat("depth"),))
         valid = skey < n_s
         n_frag = skey.shape[0]
         overflow = sum(fr.overflowed.astype(jnp.int32) for fr in lists)
@@ -88,7 +90,8 @@ def render(scene, camera, cfg: ForwardConfig) -> Frame:
             unit = jnp.arange(n_frag, dtype=jnp.int32)
         else:
             idx = jnp.arange(n_frag, dtype=jnp.int32)
-            t_b, p_b, idx_b = jax.lax.sort((jnp.where(valid, tri, BIG), pixel, idx), num_keys=2)
+            (t_b, p_b), (idx_b,) = lex_sort((jnp.where(valid, tri, BIG), pixel),
+                                            (n_tris - 1, n_pix - 1), (idx,))
             rep = idx_b[first_of_segment_index(segment_starts(t_b, p_b))]
             unit = jnp.zeros((n_frag,), jnp.int32).at[idx_b].set(rep)
 
@@ -129,7 +132,7 @@ def render(scene, camera, cfg: ForwardConfig) -> Frame:
             jnp.where(writer, order, -1), mode="drop")
 
     with jax.named_scope("quads"):
-        ql = quad_list(tri, pixel, shade_unit, w)
+        ql = quad_list(tri, pixel, shade_unit, w, h, n_tris)
         n_quads = ql["n_quads"]
 
     with jax.named_scope("shade"):

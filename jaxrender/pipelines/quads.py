@@ -11,9 +11,10 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.compaction import compact_indices
+from jaxrender.sorting import EMPTY, lex_sort
 from jaxrender.types import Array
 
-BIG = 2**31 - 1
+BIG = EMPTY  # the key of an unused entry: sorts last
 
 
 def segment_starts(*keys: Array) -> Array:
@@ -57,7 +58,7 @@ def quad_keys(pixel: Array, width: int) -> tuple[Array, Array]:
     return (y // 2) * qw + x // 2, (y % 2) * 2 + x % 2
 
 
-def quad_list(tri: Array, pixel: Array, shaded: Array, width: int):
+def quad_list(tri: Array, pixel: Array, shaded: Array, width: int, height: int, n_tris: int):
     """Group the shaded (triangle, pixel) units into 2x2 quads.
 
     Returns a dict with ``order`` (unit indices sorted by triangle, quad, lane; unshaded last),
@@ -70,7 +71,8 @@ def quad_list(tri: Array, pixel: Array, shaded: Array, width: int):
     t = jnp.where(shaded, tri, BIG)
     q = jnp.where(shaded, quad, BIG)
     idx = jnp.arange(n, dtype=jnp.int32)
-    t_s, q_s, l_s, order = jax.lax.sort((t, q, lane, idx), num_keys=3)
+    n_quads_max = ((width + 1) // 2) * ((height + 1) // 2)
+    (t_s, q_s, l_s), (order,) = lex_sort((t, q, lane), (n_tris - 1, n_quads_max - 1, 3), (idx,))
     live = t_s != BIG
     start = segment_starts(t_s, q_s) & live
     n_quads = jnp.sum(start, dtype=jnp.int32)

@@ -24,6 +24,7 @@ from jaxrender.pipelines.quads import BIG, first_of_segment_index, segment_start
 from jaxrender.pipelines.registry import register
 from jaxrender.scene.camera import world_to_clip
 from jaxrender.shading import shade
+from jaxrender.sorting import lex_sort
 from jaxrender.types import Frame
 
 EMPTY_ID = 0xFFFFFFFF
@@ -222,7 +223,10 @@ def render(scene, camera, cfg: VisBufferConfig) -> Frame:
         rh = jnp.asarray(RATE_H, jnp.int32)[rate]
         bx, by = x // rw, y // rh
         # Coarse pixels: one shade per (material, rate, aligned block), at its first pixel.
-        m_s, r_s, by_s, bx_s, p_s = jax.lax.sort((mat, rate, by, bx, pix), num_keys=5)
+        n_mat = scene.materials.albedo.shape[0]
+        n_rates = len(RATES)
+        (m_s, r_s, by_s, bx_s, p_s), _ = lex_sort(
+            (mat, rate, by, bx, pix), (n_mat - 1, n_rates - 1, h - 1, w - 1, n_pix - 1))
         live = m_s != BIG
         start = segment_starts(m_s, r_s, by_s, bx_s) & live
         anchor_sorted = p_s[first_of_segment_index(start)]
@@ -234,8 +238,10 @@ def render(scene, camera, cfg: VisBufferConfig) -> Frame:
         tile = (by // TILE) * tiles_w + bx // TILE
         sub = ((by % TILE) * TILE + bx % TILE) // cfg.wave_size
         big = lambda a: jnp.where(is_anchor, a, BIG)  # noqa: E731
-        wm, wr, wt, wsub, work = jax.lax.sort((big(mat), big(rate), big(tile), big(sub), pix),
-                                              num_keys=4)
+        n_tiles = tiles_w * -(-h // TILE)
+        (wm, wr, wt, wsub), (work,) = lex_sort(
+            (big(mat), big(rate), big(tile), big(sub)),
+            (n_mat - 1, n_rates - 1, n_tiles - 1, TILE * TILE // cfg.wave_size), (pix,))
         n_work = jnp.sum(is_anchor, dtype=jnp.int32)
         waves = jnp.sum(segment_starts(wm, wr, wt, wsub) & (wm != BIG), dtype=jnp.int32)
 

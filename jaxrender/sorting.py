@@ -1,0 +1,47 @@
+"""Lexicographic sorts of small non-negative integer keys through one packed integer key.
+
+``lax.sort`` with several key operands compiles, on a GPU, to a comparison sort over every
+operand (measured on an H100, 2026-11-22: about 40 passes of 0.14 ms over 8.3M fragments). When
+the keys' static ranges fit in 63 bits together they are packed into one int64 (or int32) and
+sorted with a permutation index: a single-key sort, which XLA hands to a radix sort, and the
+other operands follow through one gather.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import jax
+import jax.numpy as jnp
+
+from jaxrender.types import Array
+
+EMPTY = 2**31 - 1  # a key outside its range sorts after every value in it and comes back as this
+
+
+def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Array] = ()
+             ) -> tuple[list[Array], list[Array]]:
+    """Sort int32[N] ``keys`` lexicographically (the first most significant), stably, carrying
+    ``payloads`` (arrays with leading axis N). Key i holds values in [0, limits[i]] (static); a
+    value outside that range (e.g. EMPTY for an unused entry) sorts after all of them and is
+    returned as EMPTY. Returns (sorted keys, sorted payloads)."""
+    keys = [jnp.asarray(k, jnp.int32) for k in keys]
+    bits = [(int(lim) + 1).bit_length() for lim in limits]
+    idx = jnp.arange(keys[0].shape[0], dtype=jnp.int32)
+    if sum(bits) > 63:  # too wide to pack: a comparison sort on every key
+        codes = [jnp.where((k < 0) | (k > lim), EMPTY, k) for k, lim in zip(keys, limits)]
+        *out_keys, perm = jax.lax.sort((*codes, idx), num_keys=len(keys), is_stable=True)
+        return out_keys, [p[perm] for p in payloads]
+    with jax.enable_x64(sum(bits) > 31):
+        wide = jnp.int64 if sum(bits) > 31 else jnp.int32
+        packed = jnp.zeros(keys[0].shape, wide)
+        for k, lim, b in zip(keys, limits, bits):
+            code = jnp.where((k < 0) | (k > lim), lim + 1, k).astype(wide)
+            packed = (packed << b) | code
+        packed, perm = jax.lax.sort((packed, idx), num_keys=1, is_stable=True)
+        out_keys, shift = [], sum(bits)
+        for lim, b in zip(limits, bits):
+            shift -= b
+            v = ((packed >> shift) & ((1 << b) - 1)).astype(jnp.int32)
+            out_keys.append(jnp.where(v > lim, EMPTY, v))
+    return out_keys, [p[perm] for p in payloads]
