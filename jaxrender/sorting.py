@@ -32,13 +32,24 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
         codes = [jnp.where((k < 0) | (k > lim), EMPTY, k) for k, lim in zip(keys, limits)]
         *out_keys, perm = jax.lax.sort((*codes, idx), num_keys=len(keys), is_stable=True)
         return out_keys, [p[perm] for p in payloads]
-    with jax.enable_x64(sum(bits) > 31):
-        wide = jnp.int64 if sum(bits) > 31 else jnp.int32
+    # The entry's index as the last key when it fits: keys become unique, so the sort needs no
+    # stability and sorts one operand (a stable or two-operand sort may not be given to the
+    # radix sort: XLA's StableSortExpander rewrites its comparator).
+    idx_bits = max(int(keys[0].shape[0]) - 1, 1).bit_length()
+    with_index = sum(bits) + idx_bits <= 63
+    total = sum(bits) + (idx_bits if with_index else 0)
+    with jax.enable_x64(total > 31):
+        wide = jnp.int64 if total > 31 else jnp.int32
         packed = jnp.zeros(keys[0].shape, wide)
         for k, lim, b in zip(keys, limits, bits):
             code = jnp.where((k < 0) | (k > lim), lim + 1, k).astype(wide)
             packed = (packed << b) | code
-        packed, perm = jax.lax.sort((packed, idx), num_keys=1, is_stable=True)
+        if with_index:
+            packed = jax.lax.sort((packed << idx_bits) | idx.astype(wide), is_stable=False)
+            perm = (packed & ((1 << idx_bits) - 1)).astype(jnp.int32)
+            packed = packed >> idx_bits
+        else:
+            packed, perm = jax.lax.sort((packed, idx), num_keys=1, is_stable=True)
         out_keys, shift = [], sum(bits)
         for lim, b in zip(limits, bits):
             shift -= b

@@ -7,7 +7,8 @@ import pytest
 from jaxrender.sorting import EMPTY, lex_sort
 
 
-@pytest.mark.parametrize("limits", [(3, 100), (7, 2**20, 2**17), (2**31 - 2, 2**31 - 2, 5)])
+@pytest.mark.parametrize("limits", [(3, 100), (7, 2**20, 2**17), (2**24, 2**26, 2**5),
+                                    (2**31 - 2, 2**31 - 2, 5)])
 def test_lex_sort_equals_numpy_lexsort(limits):
     rng = np.random.default_rng(len(limits) + limits[0] % 97)
     n = 3000

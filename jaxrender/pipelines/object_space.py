@@ -288,6 +288,17 @@ def render(scene, camera, cfg: ObjectSpaceConfig) -> Frame:
     return _raise_on_overflow(_one_jit(scene, sheet, camera, cfg), cfg)
 
 
+def compile_aot(scene, camera, cfg: ObjectSpaceConfig):
+    """Ahead of time: this scene's sheet (host) and the compiled frame program. Returns
+    ``call(scene, camera) -> Frame`` for this same scene (and cameras of this shape)."""
+    sheet = prepare(scene, cfg)
+    compiled = _one_jit.lower(scene, sheet, camera, cfg).compile()
+    return lambda s, c: _raise_on_overflow(compiled(s, sheet, c), cfg)
+
+
+render.compile_aot = compile_aot
+
+
 def _sequence(scene, sheet, cameras, cfg):
     def step(carry, cam):
         state, t = carry

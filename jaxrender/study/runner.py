@@ -55,9 +55,12 @@ def _py(v):
     return float(x)
 
 
-def reference_frames(scene, spec, cams, ref, resolution) -> list[dict]:
-    """The reference frame of each camera, from the cache or rendered and cached."""
-    out, compiled = [], None
+def reference_frames(scene, spec, cams, ref, resolution, programs: dict | None = None
+                     ) -> list[dict]:
+    """The reference frame of each camera, from the cache or rendered and cached. ``programs``
+    (scene label -> compiled reference) lets a scene's camera paths share one compile."""
+    programs = {} if programs is None else programs
+    out, compiled = [], programs.get(spec.label)
     for cam in cams:
         key = cache.reference_key(spec, cam, ref, resolution)
         arrays = cache.load(key)
@@ -65,7 +68,8 @@ def reference_frames(scene, spec, cams, ref, resolution) -> list[dict]:
             if compiled is None:
                 pipe = backend.pipeline(ref.pipeline)
                 cfg = backend.make_config(ref.pipeline, *resolution, dict(ref.params))
-                compiled = timing.compile_render(pipe.render, scene, cam, cfg)
+                compiled = programs[spec.label] = timing.compile_render(pipe.render, scene,
+                                                                        cam, cfg)
             frame = compiled.call(scene, cam)
             arrays = {"image": np.asarray(frame.image, np.float32)}
             conv = frame.counts.get("convergence_psnr") if frame.counts else None
@@ -118,7 +122,7 @@ def _seq(study: Study, spec, path, variant) -> str:
 # Programs compiled side by side before a scene's sequences are timed (never during timing).
 # compile_ms is then the wall time of a compile that shared the machine with this many others;
 # the rows carry the number as compile_workers.
-COMPILE_WORKERS = max(1, min(2, os.cpu_count() or 1))
+COMPILE_WORKERS = max(1, min(8, os.cpu_count() or 1))
 
 
 def compile_variant(study: Study, scene, camera, variant) -> timing.Compiled:
@@ -128,15 +132,28 @@ def compile_variant(study: Study, scene, camera, variant) -> timing.Compiled:
     return timing.compile_render(pipe.render, scene, camera, cfg)
 
 
-def compile_ahead(study: Study, scene, camera, variants, workers: int):
-    """Start compiling every variant in a thread pool (XLA compiles outside the GIL, so two
-    cores compile two programs at once). Returns (pool, {variant label: future}). Nothing is
-    timed while the pool works: the caller waits for it before the first timed render."""
+def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
+    """Compile every (scene, variant) program of ``todo`` in a thread pool (XLA compiles outside
+    the GIL, so N cores compile N programs at once) while this thread renders the references
+    into the cache. A scene's camera paths share one program (same shapes). Returns
+    {(scene label, variant label): Compiled}; nothing is timed until every compile is done."""
     from concurrent.futures import ThreadPoolExecutor
 
-    pool = ThreadPoolExecutor(max_workers=workers)
-    futures = {v.label: pool.submit(compile_variant, study, scene, camera, v) for v in variants}
-    return pool, futures
+    pool = ThreadPoolExecutor(max_workers=COMPILE_WORKERS)
+    futures = {}
+    try:
+        for spec, path, v in todo:
+            if (spec.label, v.label) not in futures:
+                futures[spec.label, v.label] = pool.submit(
+                    compile_variant, study, scenes[spec.label], cams[spec.label, path.name][0], v)
+        programs: dict = {}
+        pairs = {(s.label, p.name): (s, p) for s, p, _ in todo}
+        for spec, path in pairs.values():
+            reference_frames(scenes[spec.label], spec, cams[spec.label, path.name],
+                             study.reference, study.resolution, programs=programs)
+        return {key: f.result() for key, f in futures.items()}
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def run_sequence(study: Study, scene, spec, path, cams, variant, refs, env, out_dir: Path,
@@ -307,31 +324,38 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     bar = tqdm(total=total, unit="frame", disable=not progress or total == 0,
                dynamic_ncols=True)
     try:
+        scenes, cams = {}, {}
+        for spec, path, _ in todo:
+            if spec.label not in scenes:
+                scenes[spec.label] = backend.load_scene(spec.source, dict(spec.params))
+            if (spec.label, path.name) not in cams:
+                cams[spec.label, path.name] = backend.make_cameras(scenes[spec.label], path,
+                                                                  *study.resolution)
+        bar.set_description("compiling; references")
+        t0 = time.perf_counter()
+        compiled = compile_all(study, todo, scenes, cams)
+        if compiled:
+            log(f"compiled {len(compiled)} program(s) with {COMPILE_WORKERS} worker(s) and "
+                f"rendered the references in {time.perf_counter() - t0:.1f} s")
+        t0 = time.perf_counter()
         for spec in study.scenes:
-            scene_todo = [(p, v) for s, p, v in todo if s is spec]
-            if not scene_todo:
-                continue
-            scene = backend.load_scene(spec.source, dict(spec.params))
             for path in study.paths:
-                variants = [v for p, v in scene_todo if p is path]
+                variants = [v for s, p, v in todo if s is spec and p is path]
                 if not variants:
                     continue
-                cams = backend.make_cameras(scene, path, *study.resolution)
-                bar.set_description(f"{spec.label}/{path.name}: compiling, reference")
-                pool, futures = compile_ahead(study, scene, cams[0], variants, COMPILE_WORKERS)
-                try:
-                    refs = reference_frames(scene, spec, cams, study.reference,
-                                            study.resolution)
-                    compiled = {label: f.result() for label, f in futures.items()}
-                finally:
-                    pool.shutdown(wait=True, cancel_futures=True)
+                scene, seq_cams = scenes[spec.label], cams[spec.label, path.name]
+                refs = reference_frames(scene, spec, seq_cams, study.reference,
+                                        study.resolution)
                 for v in variants:
                     bar.set_description(f"{spec.label}/{path.name}: {v.label}")
-                    rows = run_sequence(study, scene, spec, path, cams, v, refs, env, out_dir,
-                                        progress=bar, compiled=compiled[v.label])
+                    rows = run_sequence(study, scene, spec, path, seq_cams, v, refs, env,
+                                        out_dir, progress=bar,
+                                        compiled=compiled[spec.label, v.label])
                     st.append(rows)
     finally:
         bar.close()
+    if todo:
+        log(f"rendered, timed and scored {total} frame(s) in {time.perf_counter() - t0:.1f} s")
 
     rows = store.latest_rows(st.rows, seqs)
     store.export_csv(rows, out_dir / "results.csv")
@@ -345,7 +369,9 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     if figures:
         from jaxrender.figures.make import render_figures
 
+        t0 = time.perf_counter()
         made = render_figures(out_dir, study.figures, log=log)
+        log(f"figures drawn in {time.perf_counter() - t0:.1f} s")
     return RunResult(out_dir, rows, len(todo), skipped, summary, warns, made)
 
 
