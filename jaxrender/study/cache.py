@@ -72,6 +72,10 @@ def _path(key: str, root: Path | None = None) -> Path:
     return (root or cache_dir()) / f"{key}.npz"
 
 
+def has(key: str, root: Path | None = None) -> bool:
+    return _path(key, root).exists()
+
+
 def load(key: str, root: Path | None = None) -> dict | None:
     """The cached arrays, or None when missing or unreadable (then it is rebuilt)."""
     p = _path(key, root)

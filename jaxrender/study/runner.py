@@ -61,15 +61,15 @@ def reference_frames(scene, spec, cams, ref, resolution, programs: dict | None =
     (scene label -> compiled reference) lets a scene's camera paths share one compile."""
     programs = {} if programs is None else programs
     out, compiled = [], programs.get(spec.label)
+    if hasattr(compiled, "result"):  # compiling in compile_all's pool
+        compiled = programs[spec.label] = compiled.result()
     for cam in cams:
         key = cache.reference_key(spec, cam, ref, resolution)
         arrays = cache.load(key)
         if arrays is None:
             if compiled is None:
-                pipe = backend.pipeline(ref.pipeline)
-                cfg = backend.make_config(ref.pipeline, *resolution, dict(ref.params))
-                compiled = programs[spec.label] = timing.compile_render(pipe.render, scene,
-                                                                        cam, cfg)
+                compiled = programs[spec.label] = compile_reference(scene, cam, ref,
+                                                                    resolution)
             frame = compiled.call(scene, cam)
             arrays = {"image": np.asarray(frame.image, np.float32)}
             conv = frame.counts.get("convergence_psnr") if frame.counts else None
@@ -78,6 +78,12 @@ def reference_frames(scene, spec, cams, ref, resolution, programs: dict | None =
             cache.save(key, arrays)
         out.append(arrays)
     return out
+
+
+def compile_reference(scene, cam, ref, resolution) -> timing.Compiled:
+    pipe = backend.pipeline(ref.pipeline)
+    cfg = backend.make_config(ref.pipeline, *resolution, dict(ref.params))
+    return timing.compile_render(pipe.render, scene, cam, cfg)
 
 
 def hardest_crop(error: np.ndarray, size: int) -> tuple[int, int, int, int]:
@@ -140,14 +146,25 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
     from concurrent.futures import ThreadPoolExecutor
 
     pool = ThreadPoolExecutor(max_workers=COMPILE_WORKERS)
-    futures = {}
+    futures, programs = {}, {}
+    pairs = {(s.label, p.name): (s, p) for s, p, _ in todo}
     try:
-        for spec, path, v in todo:
+        # Submission order matters: tracing holds the GIL, so the longest chains start first.
+        # References first (this thread renders them while the rest compiles), then programs
+        # with host-side preparation (object-space charts), then the others.
+        for spec, path in pairs.values():
+            seq_cams = cams[spec.label, path.name]
+            missing = not all(cache.has(cache.reference_key(spec, c, study.reference,
+                                                            study.resolution)) for c in seq_cams)
+            if missing and spec.label not in programs:
+                programs[spec.label] = pool.submit(compile_reference, scenes[spec.label],
+                                                   seq_cams[0], study.reference,
+                                                   study.resolution)
+        has_prep = lambda v: hasattr(backend.pipeline(v.type).render, "compile_aot")  # noqa: E731
+        for spec, path, v in sorted(todo, key=lambda t: not has_prep(t[2])):
             if (spec.label, v.label) not in futures:
                 futures[spec.label, v.label] = pool.submit(
                     compile_variant, study, scenes[spec.label], cams[spec.label, path.name][0], v)
-        programs: dict = {}
-        pairs = {(s.label, p.name): (s, p) for s, p, _ in todo}
         for spec, path in pairs.values():
             reference_frames(scenes[spec.label], spec, cams[spec.label, path.name],
                              study.reference, study.resolution, programs=programs)
