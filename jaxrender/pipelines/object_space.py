@@ -299,6 +299,24 @@ def compile_aot(scene, camera, cfg: ObjectSpaceConfig):
 render.compile_aot = compile_aot
 
 
+def compile_aot_parts(scene, camera, cfg: ObjectSpaceConfig):
+    """``compile_aot`` in picklable halves, for compiling in another process (the study's
+    compile pool): ``(jitted, args, sheet)``, where ``jitted.lower(*args).compile()`` is
+    compile_aot's program and ``aot_call(compiled, sheet, cfg)`` rebuilds its call."""
+    sheet = prepare(scene, cfg)
+    return _one_jit, (scene, sheet, camera, cfg), sheet
+
+
+def aot_call(compiled, sheet, cfg: ObjectSpaceConfig):
+    """compile_aot's ``call(scene, camera) -> Frame`` from the compiled (or deserialized)
+    program of ``compile_aot_parts`` and its sheet."""
+    return lambda s, c: _raise_on_overflow(compiled(s, sheet, c), cfg)
+
+
+render.compile_aot_parts = compile_aot_parts
+render.aot_call = aot_call
+
+
 def _sequence(scene, sheet, cameras, cfg):
     def step(carry, cam):
         state, t = carry

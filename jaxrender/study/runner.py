@@ -139,15 +139,40 @@ def compile_variant(study: Study, scene, camera, variant) -> timing.Compiled:
 
 
 def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
-    """Compile every (scene, variant) program of ``todo`` in a thread pool (XLA compiles outside
-    the GIL, so N cores compile N programs at once) while this thread renders the references
-    into the cache. A scene's camera paths share one program (same shapes). Returns
-    {(scene label, variant label): Compiled}; nothing is timed until every compile is done."""
+    """Compile every (scene, variant) program of ``todo``, and the reference program of each
+    scene whose references are not all cached, side by side while this thread renders the
+    references into the cache. A scene's camera paths share one program (same shapes). Returns
+    {(scene label, variant label): Compiled}; nothing is timed until every compile is done.
+
+    With more than two workers (or ``JAXRENDER_COMPILE_PROCESSES=1``) the programs compile in
+    spawned worker processes (``compile_pool``): tracing and lowering hold the GIL, so threads
+    would take turns on it. Otherwise (and for any program a worker cannot take) in a thread
+    pool: XLA compiles outside the GIL, so N cores still compile N programs at once."""
     from concurrent.futures import ThreadPoolExecutor
 
+    from jaxrender.study import compile_pool
+
     pool = ThreadPoolExecutor(max_workers=COMPILE_WORKERS)
+    procs = (compile_pool.ProcessCompiler(COMPILE_WORKERS, pool)
+             if compile_pool.use_processes(COMPILE_WORKERS) else None)
     futures, programs = {}, {}
     pairs = {(s.label, p.name): (s, p) for s, p, _ in todo}
+
+    def submit(label, spec, path, pipe, params, fn, *args):
+        """fn(*args) in a thread, or its program (pipeline ``pipe`` with ``params``) in a
+        worker process with fn(*args) as the fallback."""
+        if procs is None:
+            return pool.submit(fn, *args)
+        try:
+            job = compile_pool.Job(
+                backend.load_scene, backend.make_cameras, spec.source,
+                tuple(dict(spec.params).items()), path, tuple(study.resolution),
+                backend.pipeline(pipe).render,
+                backend.make_config(pipe, *study.resolution, dict(params)))
+        except Exception:  # fn raises it again, where the thread path would
+            return pool.submit(fn, *args)
+        return procs.submit(label, job, lambda: fn(*args))
+
     try:
         # Submission order matters: tracing holds the GIL, so the longest chains start first.
         # References first (this thread renders them while the rest compiles), then programs
@@ -157,19 +182,23 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
             missing = not all(cache.has(cache.reference_key(spec, c, study.reference,
                                                             study.resolution)) for c in seq_cams)
             if missing and spec.label not in programs:
-                programs[spec.label] = pool.submit(compile_reference, scenes[spec.label],
-                                                   seq_cams[0], study.reference,
-                                                   study.resolution)
+                ref = study.reference
+                programs[spec.label] = submit(
+                    f"the reference of {spec.label}", spec, path, ref.pipeline, ref.params,
+                    compile_reference, scenes[spec.label], seq_cams[0], ref, study.resolution)
         has_prep = lambda v: hasattr(backend.pipeline(v.type).render, "compile_aot")  # noqa: E731
         for spec, path, v in sorted(todo, key=lambda t: not has_prep(t[2])):
             if (spec.label, v.label) not in futures:
-                futures[spec.label, v.label] = pool.submit(
-                    compile_variant, study, scenes[spec.label], cams[spec.label, path.name][0], v)
+                futures[spec.label, v.label] = submit(
+                    f"{spec.label}/{v.label}", spec, path, v.type, v.params, compile_variant,
+                    study, scenes[spec.label], cams[spec.label, path.name][0], v)
         for spec, path in pairs.values():
             reference_frames(scenes[spec.label], spec, cams[spec.label, path.name],
                              study.reference, study.resolution, programs=programs)
         return {key: f.result() for key, f in futures.items()}
     finally:
+        if procs is not None:
+            procs.shutdown()
         pool.shutdown(wait=True, cancel_futures=True)
 
 

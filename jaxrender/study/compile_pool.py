@@ -1,0 +1,265 @@
+"""Compile study programs in spawned worker processes, so that tracing and lowering (Python,
+under the GIL) run in parallel and not only XLA's compile.
+
+Each job names a scene (``load_scene(source, params)``), a camera path (the first camera of
+``make_cameras(scene, path, width, height)``), a render function and its config. The worker
+loads the scene itself (cached per worker), lowers and compiles the program exactly as
+``timing.compile_render`` does in-process, and returns the executable serialized with
+``jax.experimental.serialize_executable``; the parent deserializes it onto its first device and
+wraps it in a ``timing.Compiled`` whose compile_ms is the worker's lower+compile time.
+
+A pipeline with host-side preparation (``render.compile_aot``) takes part only when it also
+provides ``render.compile_aot_parts(scene, camera, cfg) -> (jitted, args, extra)`` and
+``render.aot_call(compiled, extra, cfg) -> call``: the worker compiles ``jitted.lower(*args)``
+and sends ``extra`` (object_space's sheet) back pickled beside the executable.
+
+Every job that cannot go through a worker (unpicklable pieces, a worker error, an executable
+that does not serialize, a broken pool) is compiled by the caller's ``fallback`` in a thread
+instead, with a logged note: a program is never dropped.
+
+Workers are started with "spawn" (never "fork": the parent has JAX/CUDA threads), without the
+parent's ``__main__`` (as ``jaxrender.figures.parallel`` does), with
+``XLA_PYTHON_CLIENT_PREALLOCATE=false`` (a worker compiles, it must not hold GPU memory) and the
+parent's ``jax.config`` values; the rest of the environment (JAX_PLATFORMS, XLA_FLAGS, ...)
+is inherited. This module imports nothing heavy at the top, so a worker sets its environment
+before JAX starts.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import pickle
+import sys
+import threading
+import time
+import types
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any, Callable
+
+log = logging.getLogger("jaxrender.study")
+
+ENV = "JAXRENDER_COMPILE_PROCESSES"
+
+
+def use_processes(workers: int) -> bool:
+    """Compile in worker processes? ``JAXRENDER_COMPILE_PROCESSES=1`` forces it, ``=0``
+    forbids it; otherwise only with more than two workers (the 2-core CI machine keeps
+    threads)."""
+    v = os.environ.get(ENV, "").strip().lower()
+    if v in ("1", "true", "yes", "on"):
+        return True
+    if v in ("0", "false", "no", "off"):
+        return False
+    return workers > 2
+
+
+@dataclass(frozen=True)
+class Job:
+    """One program to compile in a worker: everything is pickled by value or by reference."""
+
+    load_scene: Callable  # backend.load_scene
+    make_cameras: Callable  # backend.make_cameras
+    source: str
+    scene_params: tuple  # items of the scene's parameters
+    path: Any  # schema.PathSpec
+    resolution: tuple  # (width, height)
+    render: Callable  # the pipeline's render function
+    cfg: Any  # its config
+
+
+# ------------------------------------------------------------------ worker side
+
+_SCENES: dict = {}  # (loader, source, params) -> scene, per worker process
+_CAMERAS: dict = {}
+
+
+def _init_worker(config_values: dict) -> None:
+    os.environ["XLA_PYTHON_CLIENT_PREALLOCATE"] = "false"
+    import jax
+
+    current = jax.config.values
+    for name, value in config_values.items():
+        try:
+            if current.get(name, value) != value:
+                jax.config.update(name, value)
+        except Exception:  # an option that cannot change after start: leave it
+            pass
+
+
+def _camera(job: Job):
+    skey = (job.load_scene, job.source, job.scene_params)
+    scene = _SCENES.get(skey)
+    if scene is None:
+        scene = _SCENES[skey] = job.load_scene(job.source, dict(job.scene_params))
+    ckey = skey + (job.make_cameras, job.path, tuple(job.resolution))
+    cam = _CAMERAS.get(ckey)
+    if cam is None:
+        cam = _CAMERAS[ckey] = job.make_cameras(scene, job.path, *job.resolution)[0]
+    return scene, cam
+
+
+def compile_job(payload: bytes) -> bytes:
+    """Worker: the pickled Job -> pickled ("aot", compile_ms, executable, in_tree, out_tree,
+    extra) or ("first_call",) when the program cannot be lowered as a whole (as
+    ``timing.compile_render`` decides). The job and the result travel as bytes so that a
+    (un)pickling error is this job's error, never the pool's."""
+    import jax
+    from jax.experimental.serialize_executable import serialize
+
+    job: Job = pickle.loads(payload)
+    scene, cam = _camera(job)
+    parts = getattr(job.render, "compile_aot_parts", None)
+    t0 = time.perf_counter()
+    if parts is not None:
+        jitted, args, extra = parts(scene, cam, job.cfg)
+        compiled = jitted.lower(*args).compile()
+    else:
+        extra = None
+        try:
+            compiled = jax.jit(job.render, static_argnums=2).lower(scene, cam, job.cfg).compile()
+        except Exception:
+            return pickle.dumps(("first_call",))
+    ms = (time.perf_counter() - t0) * 1e3
+    exe, in_tree, out_tree = serialize(compiled)
+    return pickle.dumps(("aot", ms, exe, in_tree, out_tree, extra))
+
+
+# ------------------------------------------------------------------ parent side
+
+
+def processable(render) -> bool:
+    """Can a worker compile this pipeline's program as compile_render would?"""
+    if hasattr(render, "compile_aot"):
+        return hasattr(render, "compile_aot_parts") and hasattr(render, "aot_call")
+    return True
+
+
+def load(result: bytes, render, cfg):
+    """The parent's ``timing.Compiled`` from a worker's result."""
+    import jax
+    from jax.experimental.serialize_executable import deserialize_and_load
+
+    from jaxrender.study import timing
+
+    res = pickle.loads(result)
+    if res[0] == "first_call":
+        return timing.Compiled(lambda s, c: render(s, c, cfg), float("nan"), "first_call")
+    _, ms, exe, in_tree, out_tree, extra = res
+    dev = jax.devices()[0]
+    compiled = deserialize_and_load(exe, in_tree, out_tree, backend=dev.client,
+                                    execution_devices=[dev])
+    if hasattr(render, "compile_aot_parts"):
+        call = render.aot_call(compiled, extra, cfg)
+    else:
+        call = lambda s, c: compiled(s, c)  # noqa: E731
+    return timing.Compiled(call, float(ms), "aot")
+
+
+@contextlib.contextmanager
+def main_hidden():
+    """While workers start, show ``multiprocessing.spawn`` a main module with neither a file
+    nor a spec, so a spawned child does not import (and run) the parent's main script
+    (``jaxrender.figures.parallel._main_hidden``; repeated here so that compiling does not
+    import matplotlib). Pickling under it also refuses anything that lives in ``__main__``."""
+    main = sys.modules.get("__main__")
+    sys.modules["__main__"] = types.ModuleType("__main__")
+    try:
+        yield
+    finally:
+        if main is None:
+            del sys.modules["__main__"]
+        else:
+            sys.modules["__main__"] = main
+
+
+class ProcessCompiler:
+    """``submit(label, job, fallback) -> Future[timing.Compiled]``: compiled in a worker
+    process and loaded in one of ``threads``; on any failure, ``fallback()`` (in-process
+    compile) runs in ``threads`` instead, with a logged note."""
+
+    def __init__(self, workers: int, threads: ThreadPoolExecutor):
+        self.workers = max(1, workers)
+        self.threads = threads
+        self._procs = None
+        self._lock = threading.Lock()
+        self._closing = False
+        self.fallbacks: list[str] = []  # labels compiled in a thread instead (and why)
+
+    def _pool(self):
+        if self._procs is None:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            import jax
+
+            values = {}
+            for k, v in jax.config.values.items():
+                try:
+                    pickle.dumps(v)
+                except Exception:
+                    continue
+                values[k] = v
+            self._procs = ProcessPoolExecutor(
+                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
+                initializer=_init_worker, initargs=(values,))
+        return self._procs
+
+    def _fallback(self, label: str, why: str, fallback: Callable, out: Future) -> None:
+        note = f"compiling {label} in a thread instead of a worker process: {why}"
+        log.warning(note)
+        with self._lock:
+            self.fallbacks.append(note)
+        try:
+            out.set_result(fallback())
+        except BaseException as e:
+            out.set_exception(e)
+
+    def submit(self, label: str, job: Job, fallback: Callable[[], Any]) -> Future:
+        out: Future = Future()
+        if not processable(job.render):
+            self.threads.submit(self._fallback, label, "its pipeline has compile_aot but no "
+                                "compile_aot_parts / aot_call", fallback, out)
+            return out
+        try:
+            with main_hidden():  # workers are spawned as jobs are submitted
+                payload = pickle.dumps(job)
+                pf = self._pool().submit(compile_job, payload)
+        except Exception as e:
+            self.threads.submit(self._fallback, label, f"{type(e).__name__}: {e}", fallback,
+                                out)
+            return out
+
+        def done(pf):
+            if self._closing:
+                out.cancel()
+                return
+            try:
+                self.threads.submit(self._finish, label, job, pf, fallback, out)
+            except RuntimeError:  # the thread pool is shut down: the caller is gone
+                out.cancel()
+
+        pf.add_done_callback(done)
+        return out
+
+    def _finish(self, label, job, pf, fallback, out: Future) -> None:
+        try:
+            res = load(pf.result(), job.render, job.cfg)
+        except Exception as e:
+            if self._closing:
+                out.cancel()
+                return
+            self._fallback(label, f"{type(e).__name__}: {e}", fallback, out)
+            return
+        out.set_result(res)
+
+    def shutdown(self) -> None:
+        self._closing = True
+        if self._procs is not None:
+            self._procs.shutdown(wait=True, cancel_futures=True)
+
+
+__all__ = ["ENV", "Job", "ProcessCompiler", "compile_job", "load", "main_hidden",
+           "use_processes"]

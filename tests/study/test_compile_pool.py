@@ -1,0 +1,164 @@
+"""compile_all in worker processes (compile_pool) gives the programs of the thread path.
+
+The process path is forced with JAXRENDER_COMPILE_PROCESSES=1 (the 2-core CI machine would
+otherwise keep threads); its frames, counts and aux must equal the thread path's bitwise."""
+
+import logging
+
+import jax
+import numpy as np
+import pytest
+
+from jaxrender.study import backend, compile_pool, runner, testing
+from jaxrender.study.schema import load_study
+
+
+class FakeLoader:
+    """The fake scenes of ``testing.install``, loadable in a worker (picklable by reference;
+    install's own loader is a closure, which a worker cannot receive)."""
+
+    colors = {"tiny": (1.0, 0.8, 0.6), "tiny2": (0.3, 0.9, 0.5)}
+
+    def __call__(self, source, params):
+        import jax.numpy as jnp
+
+        return testing.FakeScene(jnp.asarray(self.colors[source], jnp.float32), source)
+
+
+def _plan(study_file):
+    study = load_study(study_file)
+    todo = [(s, p, v) for s in study.scenes for p in study.paths for v in study.variants]
+    scenes = {s.label: backend.load_scene(s.source, dict(s.params)) for s in study.scenes}
+    cams = {(s.label, p.name): backend.make_cameras(scenes[s.label], p, *study.resolution)
+            for s in study.scenes for p in study.paths}
+    return study, todo, scenes, cams
+
+
+def _frames(study, todo, scenes, cams, compiled):
+    out = {}
+    for s, p, v in todo:
+        prog = compiled[s.label, v.label]
+        for t, cam in enumerate(cams[s.label, p.name]):
+            f = prog.call(scenes[s.label], cam)
+            out[s.label, p.name, v.label, t] = jax.tree.map(np.asarray, (f.image, f.counts,
+                                                                          f.aux))
+    return out
+
+
+def _assert_bitwise(a, b):
+    assert a.keys() == b.keys()
+    for k in a:
+        la, lb = jax.tree.leaves(a[k]), jax.tree.leaves(b[k])
+        assert len(la) == len(lb), k
+        for x, y in zip(la, lb):
+            assert x.dtype == y.dtype and x.shape == y.shape, k
+            assert x.tobytes() == y.tobytes(), k
+
+
+def _compile(monkeypatch, mode, plan, tmp_path):
+    """compile_all with threads ("0") or worker processes ("1"), each with an empty reference
+    cache (so the reference programs compile too); the cached reference arrays with it."""
+    from jaxrender.study import cache
+
+    monkeypatch.setenv(compile_pool.ENV, mode)
+    monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / f"cache{mode}"))
+    out = runner.compile_all(*plan)
+    study, todo, scenes, cams = plan
+    refs = {}
+    for s, p, _ in todo:
+        for t, cam in enumerate(cams[s.label, p.name]):
+            refs[s.label, p.name, t] = cache.load(cache.reference_key(
+                s, cam, study.reference, study.resolution))
+    return out, refs
+
+
+def _keys(plan):
+    return {(s.label, v.label) for s, _, v in plan[1]}
+
+
+def _notes(caplog):
+    return [r.getMessage() for r in caplog.records if "thread instead" in r.getMessage()]
+
+
+def test_switch(monkeypatch):
+    monkeypatch.delenv(compile_pool.ENV, raising=False)
+    assert not compile_pool.use_processes(2) and compile_pool.use_processes(3)
+    monkeypatch.setenv(compile_pool.ENV, "1")
+    assert compile_pool.use_processes(1)
+    monkeypatch.setenv(compile_pool.ENV, "0")
+    assert not compile_pool.use_processes(16)
+
+
+def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog):
+    monkeypatch.setattr(backend, "load_scene", FakeLoader())
+    plan = _plan(tiny_study)
+    threads, ref_t = _compile(monkeypatch, "0", plan, tmp_path)
+    with caplog.at_level(logging.WARNING, "jaxrender.study"):
+        procs, ref_p = _compile(monkeypatch, "1", plan, tmp_path)
+    assert _notes(caplog) == []  # every program (references too) came from a worker
+    assert threads.keys() == procs.keys() == _keys(plan)
+    assert {c.method for c in procs.values()} == {"aot"}
+    assert all(c.compile_ms > 0 for c in procs.values())
+    _assert_bitwise(_frames(*plan, threads), _frames(*plan, procs))
+    _assert_bitwise(ref_t, ref_p)  # the references, rendered by programs from a worker
+
+
+def test_unpicklable_falls_back_to_threads(tiny_study, tmp_path, monkeypatch, caplog):
+    # testing.install's scene loader is a closure: no job can go to a worker
+    plan = _plan(tiny_study)
+    threads, ref_t = _compile(monkeypatch, "0", plan, tmp_path)
+    with caplog.at_level(logging.WARNING, "jaxrender.study"):
+        procs, ref_p = _compile(monkeypatch, "1", plan, tmp_path)
+    # every program and both references: none dropped, each with its note
+    assert len(_notes(caplog)) == len(_keys(plan)) + 2
+    assert threads.keys() == procs.keys() == _keys(plan)
+    _assert_bitwise(_frames(*plan, threads), _frames(*plan, procs))
+    _assert_bitwise(ref_t, ref_p)
+
+
+class BadLoader:
+    def __call__(self, source, params):
+        raise KeyError(f"no scene {source!r} in a worker")
+
+
+def test_worker_error_falls_back(tiny_study, tmp_path, monkeypatch, caplog):
+    # a loader that fails in the worker: every program is compiled in a thread instead
+    monkeypatch.setattr(backend, "load_scene", FakeLoader())
+    plan = _plan(tiny_study)
+    monkeypatch.setattr(backend, "load_scene", BadLoader())
+    with caplog.at_level(logging.WARNING, "jaxrender.study"):
+        procs, _ = _compile(monkeypatch, "1", plan, tmp_path)
+    notes = _notes(caplog)
+    assert len(notes) == len(_keys(plan)) + 2 and all("KeyError" in n for n in notes), notes
+    assert procs.keys() == _keys(plan) and {c.method for c in procs.values()} == {"aot"}
+
+
+REAL = """
+name = "tiny_real"
+resolution = "32x18"
+frames = 2
+save_frames = []
+scenes = [{ name = "spheres", params = { rows = 1, cols = 2, lat = 6, lon = 12 } }]
+paths = ["static"]
+
+[timing]
+warmup = 0
+repeats = 1
+
+[[pipelines]]
+type = "object_space"
+"""
+
+
+@pytest.mark.slow
+def test_real_object_space(tmp_path, monkeypatch):
+    """A real pipeline with host-side preparation (compile_aot_parts: the sheet comes back
+    from the worker) and the real reference, both ways."""
+    f = tmp_path / "real.toml"
+    f.write_text(REAL)
+    plan = _plan(f)
+    threads, ref_t = _compile(monkeypatch, "0", plan, tmp_path)
+    procs, ref_p = _compile(monkeypatch, "1", plan, tmp_path)
+    assert {c.method for c in procs.values()} == {"aot"}
+    _assert_bitwise(_frames(*plan, threads), _frames(*plan, procs))
+    _assert_bitwise(ref_t, ref_p)
