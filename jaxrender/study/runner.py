@@ -138,11 +138,17 @@ def compile_variant(study: Study, scene, camera, variant) -> timing.Compiled:
     return timing.compile_render(pipe.render, scene, camera, cfg)
 
 
+def program_key(spec, variant) -> tuple:
+    """One compiled program per scene and variant: the points of a sweep share a label, so the
+    key holds their parameters too."""
+    return spec.label, variant.label, variant.params_json
+
+
 def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
     """Compile every (scene, variant) program of ``todo``, and the reference program of each
     scene whose references are not all cached, side by side while this thread renders the
     references into the cache. A scene's camera paths share one program (same shapes). Returns
-    {(scene label, variant label): Compiled}; nothing is timed until every compile is done.
+    {program_key(spec, variant): Compiled}; nothing is timed until every compile is done.
 
     With more than two workers (or ``JAXRENDER_COMPILE_PROCESSES=1``) the programs compile in
     spawned worker processes (``compile_pool``): tracing and lowering hold the GIL, so threads
@@ -188,8 +194,8 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
                     compile_reference, scenes[spec.label], seq_cams[0], ref, study.resolution)
         has_prep = lambda v: hasattr(backend.pipeline(v.type).render, "compile_aot")  # noqa: E731
         for spec, path, v in sorted(todo, key=lambda t: not has_prep(t[2])):
-            if (spec.label, v.label) not in futures:
-                futures[spec.label, v.label] = submit(
+            if program_key(spec, v) not in futures:
+                futures[program_key(spec, v)] = submit(
                     f"{spec.label}/{v.label}", spec, path, v.type, v.params, compile_variant,
                     study, scenes[spec.label], cams[spec.label, path.name][0], v)
         for spec, path in pairs.values():
@@ -396,7 +402,7 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
                     bar.set_description(f"{spec.label}/{path.name}: {v.label}")
                     rows = run_sequence(study, scene, spec, path, seq_cams, v, refs, env,
                                         out_dir, progress=bar,
-                                        compiled=compiled[spec.label, v.label])
+                                        compiled=compiled[program_key(spec, v)])
                     st.append(rows)
     finally:
         bar.close()

@@ -59,6 +59,17 @@ def test_end_to_end(tiny_study, tmp_path):
     assert again.paths == load_study(tiny_study).paths
 
 
+def test_each_sweep_point_renders_with_its_own_parameters(tiny_study, tmp_path):
+    """The points of a sweep share a label; each must still get its own compiled program."""
+    res, _ = _run(tiny_study, tmp_path / "run", figures=False)
+    inv = {}
+    for r in res.rows:
+        if r["pipeline"] == "flat":
+            inv.setdefault(r["params"]["levels"], set()).add(r["shade_invocations"])
+    # the fake pipeline shades covered * min(levels, 16) // 16 pixels
+    assert max(inv[4]) < min(inv[16]), f"levels 4 and 16 rendered alike: {inv}"
+
+
 def test_resume_recomputes_nothing_stored(tiny_study, tmp_path, monkeypatch):
     out = tmp_path / "run"
     _run(tiny_study, out, figures=False)
