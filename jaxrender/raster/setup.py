@@ -44,6 +44,7 @@ class TriSetup:
     x0: Array  # int32[N] first pixel column of the bounding box (for this sample offset)
     y0: Array  # int32[N]
     bw: Array  # int32[N] bounding box width in pixels (>= 1)
+    bh: Array  # int32[N] bounding box height in rows; 0 for a slot that produces nothing
     count: Array  # int64[N] pixels in the bounding box; 0 for a slot that produces nothing
     tri: Array  # int32[N] id of the original triangle (a clipped fan keeps its parent's id)
 
@@ -111,6 +112,7 @@ def setup_triangles(
         x0=x0.astype(jnp.int32),
         y0=y0.astype(jnp.int32),
         bw=jnp.maximum(bw, 1),
+        bh=jnp.where(count > 0, bh, 0),
         count=count,
         tri=tri_ids.astype(jnp.int32),
     )
