@@ -106,22 +106,36 @@ def _materialize(tree, true: Array):
                         tree)
 
 
+def _in_chunks(total: Array, cap: int, state, body):
+    """``state = body(state, base, size)`` over the items [0, total): full chunks of ``cap``,
+    then the rest in chunks of cap / 4. A chunk costs its full size, so this bounds the
+    waste of the last chunk by cap / 4 instead of cap (the 640x360 terrain's 141k pixels
+    run as 131k + 33k instead of 2 x 131k)."""
+    small = max(cap // 4, 1)
+    n_big = total // cap
+    state = jax.lax.fori_loop(jnp.int64(0), n_big, lambda k, st: body(st, k * cap, cap), state)
+    done = n_big * cap
+    n_small = (total - done + small - 1) // small
+    return jax.lax.fori_loop(
+        jnp.int64(0), n_small, lambda k, st: body(st, done + k * small, small), state
+    )
+
+
 def for_each_span_chunk(setup: TriSetup, capacity: int, offset: Array, state, fn):
     """``coverage.for_each_chunk`` by spans: rows in chunks, then each row chunk's covered
     pixels in chunks (both loops have dynamic trip counts; nothing is dropped)."""
     row_cap, pix_cap = span_capacities(capacity)
     rows_incl = jnp.cumsum(setup.bh.astype(jnp.int64))  # over triangles: small
-    n_row_chunks = (rows_incl[-1] + row_cap - 1) // row_cap
 
-    def row_chunk(i, st):
-        row = _rows(setup, rows_incl, i * row_cap, row_cap, offset)
-        row = _materialize(row, i < n_row_chunks)
+    def row_chunk(st, base, cap):
+        row = _rows(setup, rows_incl, base, cap, offset)
+        row = _materialize(row, base < rows_incl[-1])
         incl = _cumsum(row["n"].astype(jnp.int64))
-        n_chunks = (incl[-1] + pix_cap - 1) // pix_cap
+        return _in_chunks(incl[-1], pix_cap, st,
+                          lambda st2, b, c: fn(st2, _pixels(row, incl, b, c)))
 
-        def pix_chunk(k, st2):
-            return fn(st2, _pixels(row, incl, k * pix_cap, pix_cap))
-
-        return jax.lax.fori_loop(jnp.int64(0), n_chunks, pix_chunk, st)
-
-    return jax.lax.fori_loop(jnp.int64(0), n_row_chunks, row_chunk, state)
+    # Rows run in equal chunks: splitting their last chunk too would split the pixel work
+    # into more, smaller runs (measured: no gain).
+    n_row_chunks = (rows_incl[-1] + row_cap - 1) // row_cap
+    return jax.lax.fori_loop(jnp.int64(0), n_row_chunks,
+                             lambda i, st: row_chunk(st, i * row_cap, row_cap), state)
