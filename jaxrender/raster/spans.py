@@ -30,8 +30,8 @@ _FAR = 1 << 30  # a column bound beyond any image (width < 2^31, boxes inside th
 def span_capacities(capacity: int) -> tuple[int, int]:
     """(rows, pixels) per chunk from the box traversal's item capacity. Rows are ~1/10 of the
     box pixels and covered pixels ~1/3 (640x360 terrain: 45k rows, 141k fragments, 460k box
-    pixels); a chunk costs its full size, so these keep the default to one row chunk and two
-    pixel chunks there."""
+    pixels); a chunk costs its full size, so the default runs one row chunk there, and the
+    pixels as one chunk plus one quarter chunk (see ``_in_chunks``)."""
     return max(capacity // 8, 64), max(capacity // 4, 64)
 
 
