@@ -95,15 +95,17 @@ def _pixels(row: dict, incl: Array, base: Array, capacity: int) -> WorkChunk:
     return WorkChunk(g["slot"], g["tri"], px, g["y"], live, depth)
 
 
-def _materialize(tree, true: Array):
-    """``tree`` itself, computed once into buffers. XLA CPU otherwise fuses the row-bound
+def _computed_once(make, true: Array):
+    """``make()``, computed into buffers of its own. XLA CPU otherwise fuses the row-bound
     arithmetic into every level of the scan below and every gather of the pixel stage, and
     re-evaluates it there (measured 2026-11-22, 2-core CPU, 640x360 terrain: 3.5 ms of 17).
     ``optimization_barrier`` does not stop it (the CPU pipeline removes barriers before
-    fusion); a conditional's operands are always buffers. ``true`` is a traced predicate
-    that holds, so that the conditional is not folded away."""
-    return jax.lax.cond(true, lambda t: t, lambda t: jax.tree_util.tree_map(jnp.zeros_like, t),
-                        tree)
+    fusion); a conditional's results are always buffers. ``true`` is a traced predicate that
+    holds, so that the conditional is not folded away; computing inside the branch writes the
+    table once, where passing it through the branch would copy it."""
+    shapes = jax.eval_shape(make)
+    zeros = lambda: jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)  # noqa: E731
+    return jax.lax.cond(true, make, zeros)
 
 
 def _in_chunks(total: Array, cap: int, state, body):
@@ -128,8 +130,8 @@ def for_each_span_chunk(setup: TriSetup, capacity: int, offset: Array, state, fn
     rows_incl = jnp.cumsum(setup.bh.astype(jnp.int64))  # over triangles: small
 
     def row_chunk(st, base, cap):
-        row = _rows(setup, rows_incl, base, cap, offset)
-        row = _materialize(row, base < rows_incl[-1])
+        row = _computed_once(lambda: _rows(setup, rows_incl, base, cap, offset),
+                             base < rows_incl[-1])
         incl = _cumsum(row["n"].astype(jnp.int64))
         return _in_chunks(incl[-1], pix_cap, st,
                           lambda st2, b, c: fn(st2, _pixels(row, incl, b, c)))
