@@ -101,11 +101,13 @@ def for_each_chunk(
     setup: TriSetup, capacity: int, offset: Array, state, fn: Callable[[object, WorkChunk], object],
     traversal: str = "auto",
 ):
-    """Run ``state = fn(state, chunk)`` over all covered items of the triangles in ``setup``,
-    in chunks (dynamic trip count). Both traversals visit the same items in the same order and
-    give them the same values; ``traversal`` picks one: "bbox" (every bounding-box pixel is an
-    item, tested by the edge functions), "spans" (exact per-row spans; see ``spans.py``), or
-    "auto": spans on CPU, bounding boxes elsewhere (chosen when the program is lowered)."""
+    """Run ``state = fn(state, chunk)`` over the work items of the triangles in ``setup``, in
+    chunks (dynamic trip count). Both traversals hand ``fn`` the same covered items in the same
+    order with the same values (the box traversal also hands it uncovered items, masked by
+    ``covered``); ``traversal`` picks one: "bbox" (every bounding-box pixel is an item, tested
+    by the edge functions), "spans" (exact per-row spans; see ``spans.py``), or "auto": spans
+    on CPU, bounding boxes elsewhere (chosen when the program is lowered). ``spans`` is
+    imported here because it builds on this module."""
     if traversal == "auto":
         from jaxrender.raster.spans import for_each_span_chunk
 

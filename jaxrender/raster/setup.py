@@ -93,8 +93,8 @@ def setup_triangles(
     # Minima and maxima over the three vertices written out (exact either way): XLA CPU hands
     # a reduction over an axis of 3 to a library call that cost ~0.5 ms per reduction here.
     ox, oy = offset[0].astype(jnp.float64), offset[1].astype(jnp.float64)
-    lo = lambda v: jnp.minimum(jnp.minimum(v[:, 0], v[:, 1]), v[:, 2])  # noqa: E731
-    hi = lambda v: jnp.maximum(jnp.maximum(v[:, 0], v[:, 1]), v[:, 2])  # noqa: E731
+    lo = lambda v: jnp.minimum(jnp.minimum(v[:, 0], v[:, 1]), v[:, 2])
+    hi = lambda v: jnp.maximum(jnp.maximum(v[:, 0], v[:, 1]), v[:, 2])
     x0 = jnp.maximum(jnp.ceil((lo(sx) - ox) / SUBPIXEL), 0.0)
     x1 = jnp.minimum(jnp.floor((hi(sx) - ox) / SUBPIXEL), width - 1.0)
     y0 = jnp.maximum(jnp.ceil((lo(sy) - oy) / SUBPIXEL), 0.0)

@@ -104,7 +104,7 @@ def _computed_once(make, true: Array):
     holds, so that the conditional is not folded away; computing inside the branch writes the
     table once, where passing it through the branch would copy it."""
     shapes = jax.eval_shape(make)
-    zeros = lambda: jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)  # noqa: E731
+    zeros = lambda: jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
     return jax.lax.cond(true, make, zeros)
 
 
