@@ -92,21 +92,27 @@ def rasterize(
         "offsets",
         "work_capacity",
         "clip_capacity",
+        "traversal",
     ),
 )
-def _rasterize(clip, faces, *, width, height, cull_backfaces, offsets, work_capacity, clip_capacity):
+def _rasterize(clip, faces, *, width, height, cull_backfaces, offsets, work_capacity, clip_capacity,
+               traversal="auto"):
     with jax.enable_x64(True):
         return _rasterize_x64(
-            clip, faces, width, height, cull_backfaces, offsets, work_capacity, clip_capacity
+            clip, faces, width, height, cull_backfaces, offsets, work_capacity, clip_capacity,
+            traversal,
         )
 
 
-def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state, fn):
+def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state, fn,
+             traversal="auto"):
     """Run ``state = fn(state, chunk)`` over every work chunk of every triangle, clipped or not.
 
     Triangles that need no clipping come first, in submission order; triangles crossing a
     clip plane follow, clipped in chunks of ``clip_cap``. Needs 64-bit types enabled.
-    Returns (state, counts) with counts of work items, clipped and non-finite triangles.
+    Returns (state, counts) with counts of work items (bounding-box pixels, whichever
+    traversal runs), clipped and non-finite triangles. ``traversal``: see
+    ``coverage.for_each_chunk`` (a test hook; "auto" picks per platform).
     """
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
@@ -124,7 +130,7 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
         ids = jnp.arange(n_tris, dtype=jnp.int32)
         main = setup_triangles(main_clip, inside, ids, width, height, offset, cull)
     with jax.named_scope("coverage"):
-        state = for_each_chunk(main, capacity, offset, state, fn)
+        state = for_each_chunk(main, capacity, offset, state, fn, traversal)
 
     def clip_chunk(k, carry):
         st, items = carry
@@ -142,7 +148,7 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
             fan_ids = jnp.repeat(idx.astype(jnp.int32), MAX_FAN)
             s = setup_triangles(fan, fan_ok, fan_ids, width, height, offset, cull)
         with jax.named_scope("coverage"):
-            st = for_each_chunk(s, capacity, offset, st, fn)
+            st = for_each_chunk(s, capacity, offset, st, fn, traversal)
         return st, items + jnp.sum(s.count)
 
     n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
@@ -157,7 +163,8 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     return state, counts
 
 
-def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap) -> VisBuffer:
+def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap,
+                   traversal="auto") -> VisBuffer:
     def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
         n_pix = width * height
 
@@ -170,7 +177,7 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
         zbuf = jnp.full((n_pix,), EMPTY_KEY, jnp.int64)
         (zbuf, frags), counts = traverse(
             clip, faces, width, height, cull, offset, capacity, clip_cap,
-            (zbuf, jnp.int64(0)), scatter_min,
+            (zbuf, jnp.int64(0)), scatter_min, traversal,
         )
         with jax.named_scope("resolve"):
             off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)

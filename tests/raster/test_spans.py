@@ -1,0 +1,85 @@
+"""The span traversal (CPU default) and the bounding-box traversal (GPU default) must give the
+same VisBuffer bit for bit, and the same fragments in the same order, on random scenes."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrender.raster import samples
+from jaxrender.raster.rasterize import _rasterize, traverse
+from jaxrender.raster.samples import to_fixed
+from jaxrender.raster.setup import SUBPIXEL_BITS
+from tests.raster.conftest import gl_clip, pad
+from tests.raster.test_exact import H, W, _random_scene
+
+FIELDS = ("tri_id", "depth", "bary", "dbary_dx", "dbary_dy")
+
+
+def _vis(clip, faces, traversal, *, cull=False, offsets=samples.CENTER, work=1 << 16, clip_cap=64):
+    return _rasterize(
+        jnp.asarray(clip), jnp.asarray(faces), width=W, height=H, cull_backfaces=cull,
+        offsets=to_fixed(offsets, SUBPIXEL_BITS), work_capacity=work, clip_capacity=clip_cap,
+        traversal=traversal,
+    )
+
+
+def _assert_same(a, b, what):
+    for name in FIELDS:
+        np.testing.assert_array_equal(
+            np.asarray(getattr(a, name)), np.asarray(getattr(b, name)), err_msg=f"{what}: {name}"
+        )
+    assert {k: int(v) for k, v in a.counts.items()} == {k: int(v) for k, v in b.counts.items()}
+
+
+@pytest.mark.parametrize("kind", ["mixed_sizes", "pixel_centres", "shared_edges"])
+def test_spans_equal_bounding_boxes(rng, kind):
+    clip, faces = _random_scene(rng, kind)
+    cull = bool(rng.integers(2))
+    _assert_same(_vis(clip, faces, "spans", cull=cull), _vis(clip, faces, "bbox", cull=cull), kind)
+
+
+def test_spans_equal_bounding_boxes_clipped_msaa_and_tiny_chunks(rng):
+    # Near-plane crossings (clipped fans), 4 sample offsets, and chunks far smaller than the
+    # work so that rows and pixels both run many chunks.
+    p = rng.uniform(-3, 3, (300, 3))
+    p[:, 2] = rng.uniform(-6, 1, 300)
+    clip, faces = pad(gl_clip(p, aspect=W / H), np.arange(300).reshape(-1, 3).astype(np.int32))
+    pattern = samples.msaa(4)
+    ref = _vis(clip, faces, "bbox", offsets=pattern)
+    for work, clip_cap in ((1 << 16, 64), (512, 3)):
+        got = _vis(clip, faces, "spans", offsets=pattern, work=work, clip_cap=clip_cap)
+        _assert_same(got, ref, f"work={work}")
+
+
+def test_spans_list_the_same_fragments_in_the_same_order(rng):
+    clip, faces = _random_scene(rng, "mixed_sizes")
+    cap = 16 * W * H
+
+    @jax.jit
+    def run(clip, faces):
+        out = {}
+        with jax.enable_x64(True):
+            for traversal in ("bbox", "spans"):
+                def append(st, c):
+                    pix, tri, depth, n = st
+                    pos = n + jnp.cumsum(c.covered, dtype=jnp.int64) - 1
+                    at = jnp.where(c.covered & (pos < cap), pos, cap)
+                    pix = pix.at[at].set(c.py * W + c.px, mode="drop")
+                    tri = tri.at[at].set(c.tri, mode="drop")
+                    depth = depth.at[at].set(c.depth, mode="drop")
+                    return pix, tri, depth, n + jnp.sum(c.covered, dtype=jnp.int64)
+
+                init = (jnp.zeros((cap,), jnp.int32), jnp.full((cap,), -1, jnp.int32),
+                        jnp.ones((cap,), jnp.float32), jnp.int64(0))
+                out[traversal], _ = traverse(
+                    clip, faces, W, H, False, jnp.asarray([128, 128], jnp.int64), 4096, 64,
+                    init, append, traversal,
+                )
+        return out
+
+    out = run(jnp.asarray(clip), jnp.asarray(faces))
+    n = int(out["bbox"][3])
+    assert 0 < n <= cap and int(out["spans"][3]) == n
+    for a, b, name in zip(out["bbox"][:3], out["spans"][:3], ("pixel", "tri", "depth")):
+        np.testing.assert_array_equal(np.asarray(b)[:n], np.asarray(a)[:n], err_msg=name)
