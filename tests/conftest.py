@@ -3,6 +3,9 @@
 import os
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
+# Tests compile in threads (the fake scenes cannot be sent to worker processes); the process
+# path has its own tests, which force it (tests/study/test_compile_pool.py).
+os.environ.setdefault("JAXRENDER_COMPILE_PROCESSES", "0")
 # The tests run tiny inputs through many distinct programs, so XLA compile time dominates the
 # suite. LLVM at -O0 halves compile time (measured: rasterizer 19-21 s -> 9-12 s on the 2-core
 # CI machine) and doubles run time, a good trade here. Never used for timings: benchmarks and
