@@ -37,10 +37,10 @@ def _plan(study_file):
 def _frames(study, todo, scenes, cams, compiled):
     out = {}
     for s, p, v in todo:
-        prog = compiled[s.label, v.label]
+        prog = compiled[runner.program_key(s, v)]
         for t, cam in enumerate(cams[s.label, p.name]):
             f = prog.call(scenes[s.label], cam)
-            out[s.label, p.name, v.label, t] = jax.tree.map(np.asarray, (f.image, f.counts,
+            out[s.label, p.name, v.label, v.params_json, t] = jax.tree.map(np.asarray, (f.image, f.counts,
                                                                           f.aux))
     return out
 
@@ -73,7 +73,7 @@ def _compile(monkeypatch, mode, plan, tmp_path):
 
 
 def _keys(plan):
-    return {(s.label, v.label) for s, _, v in plan[1]}
+    return {runner.program_key(s, v) for s, _, v in plan[1]}
 
 
 def _notes(caplog):
