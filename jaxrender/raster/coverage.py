@@ -79,7 +79,12 @@ def window_depth(e: list, z: list, inv_area: Array) -> Array:
     # A constant-depth triangle takes its vertex depth exactly: float32 barycentrics need not
     # sum to 1, and rounding must not decide between coplanar triangles (the id does).
     flat = (z[0] == z[1]) & (z[1] == z[2])
-    depth = jnp.where(flat, z[0], lam[0] * z[0] + lam[1] * z[1] + lam[2] * z[2])
+    # The products of float32 factors are exact in float64, so a compiler that contracts a
+    # multiply and an add into an FMA (XLA's CPU and GPU backends do, fusion by fusion) gets the
+    # same bits as one that does not: every program that rasterizes (VisBuffer, fragment list)
+    # computes the same depth for the same sample.
+    wide = [lam[i].astype(jnp.float64) * z[i].astype(jnp.float64) for i in range(3)]
+    depth = jnp.where(flat, z[0], (wide[0] + wide[1] + wide[2]).astype(jnp.float32))
     return jnp.clip(depth, 0.0, 1.0)
 
 
