@@ -35,6 +35,13 @@ def default_work_capacity(n_tris: int, width: int, height: int) -> int:
     return int(min(max(1 << 16, -(-want // (1 << 16)) * (1 << 16)), 1 << 25))
 
 
+# Below this many pixels "auto" keeps the bounding-box traversal on every platform: the CPU's
+# span traversal pays for itself in run time on large frames (640x360 terrain: 56 -> 21 ms) but
+# costs compile time (+1.3 s per rasterizing program on the 2-core CPU, measured 2026-11-22),
+# which dominates small frames (the quickstart at 128x72, the tests).
+SPANS_MIN_PIXELS = 1 << 16
+
+
 def default_clip_capacity(n_tris: int) -> int:
     return int(min(n_tris, 4096))
 
@@ -112,11 +119,14 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     clip plane follow, clipped in chunks of ``clip_cap``. Needs 64-bit types enabled.
     Returns (state, counts) with counts of work items (bounding-box pixels, whichever
     traversal runs), clipped and non-finite triangles. ``traversal``: see
-    ``coverage.for_each_chunk`` (a test hook; "auto" picks per platform).
+    ``coverage.for_each_chunk`` (a test hook; "auto" picks per platform, and bounding boxes
+    below SPANS_MIN_PIXELS).
     """
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
     safe = jnp.asarray(_SAFE_VERTEX, jnp.float32)
+    if traversal == "auto" and width * height < SPANS_MIN_PIXELS:
+        traversal = "bbox"
     with jax.named_scope("classify"):
         tri_clip = clip[faces]  # [T, 3, 4]
         finite = jnp.all(jnp.isfinite(tri_clip), axis=(1, 2))
