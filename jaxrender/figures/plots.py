@@ -11,7 +11,7 @@ import math
 import numpy as np
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
-from matplotlib.patches import Patch, Rectangle
+from matplotlib.patches import Rectangle
 
 from jaxrender.figures.io import new_figure, style, to_display
 

@@ -3,7 +3,6 @@ the common layout (one compile per pipeline), really is as hard as it says, and 
 promises hold in the rasterizer (coverage and ties; exactness of the raster against the NumPy
 reference is pinned in tests/raster/test_exact.py and test_robust.py, not repeated here)."""
 
-import jax.numpy as jnp
 import numpy as np
 import pytest
 

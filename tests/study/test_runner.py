@@ -1,10 +1,8 @@
 """The runner end to end on a tiny study with fake scenes, pipelines and metrics."""
 
 import csv
-import json
 import os
 
-import pytest
 
 from jaxrender.study import store
 from jaxrender.study.runner import run_study
