@@ -128,15 +128,6 @@ def device_span_ms(events, calls: int) -> float:
     return float(np.median(spans)) / 1e3
 
 
-def _value(text: str):
-    for cast in (int, float):
-        try:
-            return cast(text)
-        except ValueError:
-            pass
-    return {"true": True, "false": False}.get(text.lower(), text)
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("what", help="'raster' or a pipeline name (forward, deferred, ...)")
@@ -169,8 +160,8 @@ def main(argv=None) -> int:
     sc = load_scene(name, **params)
     cam = default_camera(sc)
     pipe = get_pipeline(args.what)
-    cfg = make_config(args.what, width=w, height=h,
-                      **{k: _value(v) for k, v in (kv.split("=", 1) for kv in args.set)})
+    _, overrides = parse_spec(args.what + ":" + ",".join(args.set))  # TOML values
+    cfg = make_config(args.what, width=w, height=h, **overrides)
     label = f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}"
     if args.what == "object_space":  # its charts are built on the host, outside the program
         from jaxrender.pipelines import object_space

@@ -9,17 +9,14 @@ figures are deterministic (``io.save_figure``), so both paths write the same byt
 Workers are started with "spawn", never "fork": the parent may have JAX (and other) threads
 running, which a forked child would inherit in an undefined state. A spawned child normally
 re-imports the parent's main script first; the workers here need nothing from it, so they are
-started without it (``_main_hidden``): an unguarded script calling ``run_study`` must not have
+started without it (``jaxrender.spawning.main_hidden``): an unguarded script calling ``run_study`` must not have
 each worker re-run the study.
 """
 
 from __future__ import annotations
 
-import contextlib
 import multiprocessing
 import os
-import sys
-import types
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -27,6 +24,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from jaxrender.figures.io import save_figure
+from jaxrender.spawning import main_hidden
 
 Job = tuple[str, Callable[[], Figure], Path]
 
@@ -62,22 +60,6 @@ def _draw(make_figure: Callable[[], Figure], stem: Path) -> list[Path]:
     return save_figure(make_figure(), stem)
 
 
-@contextlib.contextmanager
-def _main_hidden():
-    """While workers start, show ``multiprocessing.spawn`` a main module with neither a file
-    nor a spec, so a spawned child does not import (and run) the parent's main script. Only
-    ``jaxrender`` functions are sent to the workers, so they never need ``__main__``."""
-    main = sys.modules.get("__main__")
-    sys.modules["__main__"] = types.ModuleType("__main__")
-    try:
-        yield
-    finally:
-        if main is None:
-            del sys.modules["__main__"]
-        else:
-            sys.modules["__main__"] = main
-
-
 def _note(err: BaseException, label: str, stem: Path, where: str) -> None:
     err.add_note(f"while drawing figure {label} ({Path(stem).name}){where}")
 
@@ -99,7 +81,7 @@ def draw(jobs: list[Job], workers: int = 1) -> list[list[Path]]:
     ctx = multiprocessing.get_context("spawn")
     ex = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx)
     try:
-        with _main_hidden():  # workers are spawned as jobs are submitted
+        with main_hidden():  # workers are spawned as jobs are submitted
             futures = [ex.submit(_draw, make_figure, stem) for _, make_figure, stem in jobs]
         out = []
         for (label, _, stem), fut in zip(jobs, futures):

@@ -87,12 +87,14 @@ def fragments(
     jax.jit,
     static_argnames=(
         "width", "height", "capacity", "cull_backfaces", "offset", "work_capacity",
-        "clip_capacity",
+        "clip_capacity", "traversal",
     ),
 )
 def fragments_jit(
-    clip, faces, *, width, height, capacity, cull_backfaces, offset, work_capacity, clip_capacity
+    clip, faces, *, width, height, capacity, cull_backfaces, offset, work_capacity, clip_capacity,
+    traversal="auto",
 ) -> Fragments:
+    """The jitted core of ``fragments`` (no input checks); ``traversal`` as ``raster.traverse``."""
     with jax.enable_x64(True):
         def append(st, c):
             pix, tri, depth, n = st
@@ -111,7 +113,7 @@ def fragments_jit(
         )
         (pix, tri, depth, n), _ = traverse(
             clip, faces, width, height, cull_backfaces, jnp.asarray(offset, jnp.int64),
-            work_capacity, clip_capacity, init, append,
+            work_capacity, clip_capacity, init, append, traversal,
         )
         valid = jnp.arange(capacity) < n
         return Fragments(pix, tri, depth, valid, n.astype(jnp.int32))

@@ -27,17 +27,16 @@ before JAX starts.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import os
 import pickle
-import sys
 import threading
 import time
-import types
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any, Callable
+
+from jaxrender.spawning import main_hidden
 
 log = logging.getLogger("jaxrender.study")
 
@@ -158,23 +157,6 @@ def load(result: bytes, render, cfg):
     return timing.Compiled(call, float(ms), "aot")
 
 
-@contextlib.contextmanager
-def main_hidden():
-    """While workers start, show ``multiprocessing.spawn`` a main module with neither a file
-    nor a spec, so a spawned child does not import (and run) the parent's main script
-    (``jaxrender.figures.parallel._main_hidden``; repeated here so that compiling does not
-    import matplotlib). Pickling under it also refuses anything that lives in ``__main__``."""
-    main = sys.modules.get("__main__")
-    sys.modules["__main__"] = types.ModuleType("__main__")
-    try:
-        yield
-    finally:
-        if main is None:
-            del sys.modules["__main__"]
-        else:
-            sys.modules["__main__"] = main
-
-
 class ProcessCompiler:
     """``submit(label, job, fallback) -> Future[timing.Compiled]``: compiled in a worker
     process and loaded in one of ``threads``; on any failure, ``fallback()`` (in-process
@@ -261,5 +243,4 @@ class ProcessCompiler:
             self._procs.shutdown(wait=True, cancel_futures=True)
 
 
-__all__ = ["ENV", "Job", "ProcessCompiler", "compile_job", "load", "main_hidden",
-           "use_processes"]
+__all__ = ["ENV", "Job", "ProcessCompiler", "compile_job", "load", "use_processes"]

@@ -9,6 +9,7 @@ import pytest
 
 from jaxrender.figures import parallel, plots
 from jaxrender.figures.make import render_figures
+from jaxrender.spawning import main_hidden
 
 # One scene, a one-frame path (so "temporal" has nothing to draw), two variants.
 STUDY = """
@@ -101,6 +102,6 @@ def test_worker_count(monkeypatch):
 
 
 def test_workers_do_not_import_the_main_script():
-    with parallel._main_hidden():
+    with main_hidden():
         prep = multiprocessing.spawn.get_preparation_data("w")
     assert "init_main_from_path" not in prep and "init_main_from_name" not in prep

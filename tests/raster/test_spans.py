@@ -1,13 +1,13 @@
 """The span traversal (CPU default) and the bounding-box traversal (GPU default) must give the
 same VisBuffer bit for bit, and the same fragments in the same order, on random scenes."""
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from jaxrender.raster import samples
-from jaxrender.raster.rasterize import _rasterize, traverse
+from jaxrender.raster.fragments import fragments_jit
+from jaxrender.raster.rasterize import _rasterize
 from jaxrender.raster.samples import to_fixed
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from tests.raster.conftest import gl_clip, pad
@@ -56,30 +56,12 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
     clip, faces = _random_scene(rng, "mixed_sizes")
     cap = 16 * W * H
 
-    @jax.jit
-    def run(clip, faces):
-        out = {}
-        with jax.enable_x64(True):
-            for traversal in ("bbox", "spans"):
-                def append(st, c):
-                    pix, tri, depth, n = st
-                    pos = n + jnp.cumsum(c.covered, dtype=jnp.int64) - 1
-                    at = jnp.where(c.covered & (pos < cap), pos, cap)
-                    pix = pix.at[at].set(c.py * W + c.px, mode="drop")
-                    tri = tri.at[at].set(c.tri, mode="drop")
-                    depth = depth.at[at].set(c.depth, mode="drop")
-                    return pix, tri, depth, n + jnp.sum(c.covered, dtype=jnp.int64)
-
-                init = (jnp.zeros((cap,), jnp.int32), jnp.full((cap,), -1, jnp.int32),
-                        jnp.ones((cap,), jnp.float32), jnp.int64(0))
-                out[traversal], _ = traverse(
-                    clip, faces, W, H, False, jnp.asarray([128, 128], jnp.int64), 4096, 64,
-                    init, append, traversal,
-                )
-        return out
-
-    out = run(jnp.asarray(clip), jnp.asarray(faces))
-    n = int(out["bbox"][3])
-    assert 0 < n <= cap and int(out["spans"][3]) == n
-    for a, b, name in zip(out["bbox"][:3], out["spans"][:3], ("pixel", "tri", "depth")):
+    out = {tr: fragments_jit(jnp.asarray(clip), jnp.asarray(faces), width=W, height=H,
+                             capacity=cap, cull_backfaces=False, offset=(128, 128),
+                             work_capacity=4096, clip_capacity=64, traversal=tr)
+           for tr in ("bbox", "spans")}
+    n = int(out["bbox"].count)
+    assert 0 < n <= cap and int(out["spans"].count) == n
+    for name in ("pixel", "tri", "depth"):
+        a, b = getattr(out["bbox"], name), getattr(out["spans"], name)
         np.testing.assert_array_equal(np.asarray(b)[:n], np.asarray(a)[:n], err_msg=name)
