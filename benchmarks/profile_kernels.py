@@ -137,6 +137,7 @@ def main(argv=None) -> int:
                     help="scene for a pipeline, 'name' or 'name:key=value,...'")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="pipeline config override, e.g. chunk=65536")
+    ap.add_argument("--traversal", default="auto", help="for 'raster': auto, bbox, recompute, spans")
     ap.add_argument("--calls", type=int, default=5)
     ap.add_argument("--top", type=int, default=15)
     args = ap.parse_args(argv)
@@ -148,9 +149,10 @@ def main(argv=None) -> int:
         from jaxrender.raster.rasterize import _rasterize
 
         clip, faces = scene(args.triangles, w, h)
-        fn = jax.jit(lambda c, f: _rasterize(c, f, **static_args(faces.shape[0], w, h)))
+        fn = jax.jit(lambda c, f: _rasterize(c, f, **static_args(faces.shape[0], w, h),
+                                             traversal=args.traversal))
         profile_call(fn, clip, faces, calls=args.calls, top=args.top,
-                     label=f"raster {w}x{h} {faces.shape[0]} triangles")
+                     label=f"raster {w}x{h} {faces.shape[0]} triangles ({args.traversal})")
         return 0
     from jaxrender.bench.pipelines import parse_spec
     from jaxrender.pipelines import get_pipeline, make_config

@@ -105,49 +105,63 @@ def _snap(st: np.ndarray, res: int) -> np.ndarray:
     return np.round(st * (res * SUBPIXEL)).astype(np.int64)
 
 
-def raster_st(st: np.ndarray, res: int, conservative: bool = False
+def raster_st(st: np.ndarray, res: int, conservative: bool = False, window=None
               ) -> tuple[np.ndarray, np.ndarray]:
     """Rasterize chart triangles st[T, 3, 2] onto a res x res texel grid with the shared
     rasterizer's rules (8-bit snapping, exact integer edge functions, top-left fill rule, ties
     to the lowest triangle index). ``conservative``: a texel is covered when its square
     overlaps the triangle at all (edge functions at the square's most inside corner, plus the
     bounding box: the separating-axis test). Returns (owner int64[res, res] lowest covering
-    triangle or -1, hits int32[res, res] covering triangles per texel)."""
+    triangle or -1, hits int32[res, res] covering triangles per texel). ``window`` (x0, y0, w,
+    h) in texels: only that part of the grid, as arrays of shape [h, w] (the same values)."""
+    x0, y0, w, h = window if window is not None else (0, 0, res, res)
     v = _snap(st, res)
-    xs, ys = v[..., 0], v[..., 1]
+    # Shifted in fixed point (exact): texel (x0, y0) becomes the window's texel (0, 0).
+    xs, ys = v[..., 0] - x0 * SUBPIXEL, v[..., 1] - y0 * SUBPIXEL
     area2 = ((xs[:, 1] - xs[:, 0]) * (ys[:, 2] - ys[:, 0])
              - (ys[:, 1] - ys[:, 0]) * (xs[:, 2] - xs[:, 0]))
     half = SUBPIXEL // 2
     pad = half if conservative else 0
-    lo_x = np.maximum(-((half + pad - xs.min(1)) // SUBPIXEL), 0)
-    hi_x = np.minimum((xs.max(1) + pad - half) // SUBPIXEL, res - 1)
-    lo_y = np.maximum(-((half + pad - ys.min(1)) // SUBPIXEL), 0)
-    hi_y = np.minimum((ys.max(1) + pad - half) // SUBPIXEL, res - 1)
+    lo_x = np.maximum(-((half + pad - xs.min(1)) // SUBPIXEL), max(-x0, 0))
+    hi_x = np.minimum((xs.max(1) + pad - half) // SUBPIXEL, min(w, res - x0) - 1)
+    lo_y = np.maximum(-((half + pad - ys.min(1)) // SUBPIXEL), max(-y0, 0))
+    hi_y = np.minimum((ys.max(1) + pad - half) // SUBPIXEL, min(h, res - y0) - 1)
     live = (area2 != 0) & (lo_x <= hi_x) & (lo_y <= hi_y)
-    span = np.maximum(hi_x - lo_x, hi_y - lo_y) + 1
+    # Triangles in batches of similar bounding-box width and height, each batch on an
+    # [n, SY, SX] grid of powers of two: a long sliver (xatlas charts of thin boxes) costs its
+    # box, not the square around it (measured 2026-11-23: the thin scene's sheet took 66 s
+    # with square grids).
+    bits_x = _ceil_log2(hi_x - lo_x + 1)
+    bits_y = _ceil_log2(hi_y - lo_y + 1)
     big = np.int64(np.iinfo(np.int64).max)
-    owner = np.full(res * res, big, np.int64)
-    hits = np.zeros(res * res, np.int32)
-    # Triangles in batches of similar bounding-box size, each batch on an [n, S, S] grid.
-    size = 1
-    while True:
-        sel = np.nonzero(live & (span <= size) & (span > size // 2))[0]
-        for start in range(0, sel.size, max(1, (1 << 20) // (size * size))):
-            k = sel[start:start + max(1, (1 << 20) // (size * size))]
-            _cover(k, xs, ys, area2, lo_x, lo_y, hi_x, hi_y, size, res, conservative, owner,
-                   hits)
-        if size >= res:
-            break
-        size *= 2
-    owner = np.where(owner == big, -1, owner).reshape(res, res)
-    return owner, hits.reshape(res, res)
+    owner = np.full(w * h, big, np.int64)
+    hits = np.zeros(w * h, np.int32)
+    bucket = bits_x * 64 + bits_y
+    for b in np.unique(bucket[live]):
+        sel = np.nonzero(live & (bucket == b))[0]
+        sx_, sy_ = 1 << int(b // 64), 1 << int(b % 64)
+        step = max(1, (1 << 20) // (sx_ * sy_))
+        for start in range(0, sel.size, step):
+            _cover(sel[start:start + step], xs, ys, area2, lo_x, lo_y, hi_x, hi_y, sx_, sy_,
+                   w, conservative, owner, hits)
+    owner = np.where(owner == big, -1, owner).reshape(h, w)
+    return owner, hits.reshape(h, w)
 
 
-def _cover(k, xs, ys, area2, lo_x, lo_y, hi_x, hi_y, size, res, conservative, owner, hits):
+def _ceil_log2(n: np.ndarray) -> np.ndarray:
+    """Smallest b with 2^b >= n, for n >= 1 (0 where n <= 1)."""
+    n = np.maximum(np.asarray(n, np.int64), 1)
+    b = np.zeros(n.shape, np.int64)
+    while np.any((1 << b) < n):
+        b += (1 << b) < n
+    return b
+
+
+def _cover(k, xs, ys, area2, lo_x, lo_y, hi_x, hi_y, size_x, size_y, row, conservative, owner,
+           hits):
     half = SUBPIXEL // 2
-    g = np.arange(size)
-    px = lo_x[k][:, None, None] + g[None, None, :]
-    py = lo_y[k][:, None, None] + g[None, :, None]
+    px = lo_x[k][:, None, None] + np.arange(size_x)[None, None, :]
+    py = lo_y[k][:, None, None] + np.arange(size_y)[None, :, None]
     inside = (px <= hi_x[k][:, None, None]) & (py <= hi_y[k][:, None, None])
     sx, sy = px * SUBPIXEL + half, py * SUBPIXEL + half
     sign = np.where(area2[k] < 0, -1, 1)
@@ -162,33 +176,55 @@ def _cover(k, xs, ys, area2, lo_x, lo_y, hi_x, hi_y, size, res, conservative, ow
             top_left = (dy < 0) | ((dy == 0) & (dx > 0))
             inside &= (e > 0) | ((e == 0) & top_left)
     tri = np.broadcast_to(k[:, None, None], inside.shape)[inside]
-    pix = (py * res + px)[inside]
-    np.minimum.at(owner, pix, tri)
-    np.add.at(hits, pix, 1)
+    pix = (py * row + px)[inside]
+    if pix.size == 0:
+        return
+    # Lowest triangle per texel, and the count, from one sort of (texel, triangle) keys:
+    # ufunc.at (a scatter with repeats) was the slowest step of a sheet build (2026-11-23).
+    stride = int(k.max(initial=0)) + 1
+    key = np.sort(pix * stride + tri)
+    texel = key // stride
+    start = np.flatnonzero(np.r_[True, texel[1:] != texel[:-1]])
+    t = texel[start]
+    owner[t] = np.minimum(owner[t], key[start] - t * stride)
+    hits[t] += np.diff(np.r_[start, key.size]).astype(hits.dtype)
 
 
-def _raster_owner(st: np.ndarray, res: int) -> np.ndarray:
-    """Owner map int64[res, res] (local triangle index, -1 none): texel centres, then the
-    conservative pass into the texels still empty, then one ring of gutter dilation."""
-    own, _ = raster_st(st, res)
-    cons, _ = raster_st(st, res, conservative=True)
+def _raster_owner(st: np.ndarray, res: int) -> tuple[np.ndarray, int, int]:
+    """Owner map (local triangle index, -1 none) of a res x res grid: texel centres, then the
+    conservative pass into the texels still empty, then one ring of gutter dilation, then
+    triangles that own no texel claim one. Computed on the chart's texel bounding box plus
+    that ring (a thin object's chart can fill a few rows of a large grid): returns the window
+    int64[h, w] and its corner (x0, y0); every texel outside it is -1."""
+    v = _snap(st, res).reshape(-1, 2)
+    lo = np.maximum(v.min(0) // SUBPIXEL - 2, 0)
+    hi = np.minimum(v.max(0) // SUBPIXEL + 2, res - 1)
+    x0, y0 = int(lo[0]), int(lo[1])
+    win = (x0, y0, int(hi[0]) - x0 + 1, int(hi[1]) - y0 + 1)
+    own, _ = raster_st(st, res, window=win)
+    cons, _ = raster_st(st, res, conservative=True, window=win)
     own = np.where(own < 0, cons, own)
+    h, w = own.shape
     pad = np.pad(own, 1, constant_values=-1)
     dil = own.copy()
     for dy, dx in ((0, -1), (0, 1), (-1, 0), (1, 0), (-1, -1), (-1, 1), (1, -1), (1, 1)):
-        nb = pad[1 + dy:1 + dy + res, 1 + dx:1 + dx + res]
+        nb = pad[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]
         dil = np.where(dil < 0, nb, dil)
-    return dil
+    return _claim_orphans(dil, st, res, x0, y0), x0, y0
 
 
-def _claim_orphans(own: np.ndarray, st: np.ndarray, res: int) -> np.ndarray:
+def _claim_orphans(own: np.ndarray, st: np.ndarray, res: int, x0: int = 0, y0: int = 0
+                   ) -> np.ndarray:
     """Every triangle owning no texel takes the texel under its centroid (or a corner) when the
-    texel's owner keeps at least one other texel."""
+    texel's owner keeps at least one other texel. ``own`` is the window of the grid whose
+    texel (0, 0) is the grid's (x0, y0); it holds every corner's texel."""
     t = st.shape[0]
+    h, w = own.shape
     counts = np.bincount(own[own >= 0], minlength=t)
     for k in np.nonzero(counts == 0)[0]:
         for p in (st[k].mean(0), *st[k]):
             x, y = (np.clip(np.floor(p * res), 0, res - 1)).astype(np.int64)
+            x, y = min(max(x - x0, 0), w - 1), min(max(y - y0, 0), h - 1)
             prev = own[y, x]
             if prev < 0 or counts[prev] > 1:
                 if prev >= 0:
@@ -224,7 +260,9 @@ def build_sheet(scene, cfg) -> ShadeSheet:
     levels = [levels_of(r) for r in res]
     max_l = max(levels, default=1)
     base = np.zeros((len(charts), max_l), np.int64)
-    owners, c_obj, c_lvl, c_x, c_y = [], [], [], [], []
+    total = sum((r >> lv) ** 2 for r, nl in zip(res, levels) for lv in range(nl))
+    owner = np.empty(total, np.int32)  # filled level by level, chunk-major
+    c_obj, c_lvl, c_x, c_y = [], [], [], []
     n = 0
     for o, (ch, r, nl) in enumerate(zip(charts, res, levels)):
         corner[ch.tris] = ch.corner_st
@@ -232,12 +270,12 @@ def build_sheet(scene, cfg) -> ShadeSheet:
             rl = r >> lv
             cps = rl // CHUNK
             base[o, lv] = n
+            full = np.full((rl, rl), -1, np.int32)
             if ch.tris.size:
-                own = _claim_orphans(_raster_owner(ch.corner_st, rl), ch.corner_st, rl)
-                own = np.where(own >= 0, ch.tris[np.maximum(own, 0)], -1)
-            else:
-                own = np.full((rl, rl), -1, np.int64)
-            owners.append(_to_chunks(own))
+                own, x0, y0 = _raster_owner(ch.corner_st, rl)
+                full[y0:y0 + own.shape[0], x0:x0 + own.shape[1]] = np.where(
+                    own >= 0, ch.tris[np.maximum(own, 0)], -1)
+            owner[n * LANES:(n + cps * cps) * LANES] = _to_chunks(full)
             cy, cx = np.divmod(np.arange(cps * cps), cps)
             c_obj.append(np.full(cps * cps, o))
             c_lvl.append(np.full(cps * cps, lv))
@@ -250,10 +288,11 @@ def build_sheet(scene, cfg) -> ShadeSheet:
     cat = lambda xs: i32(np.concatenate(xs) if xs else np.zeros(0))
     level0 = sum((r // CHUNK) ** 2 for r in res)
     sheet = ShadeSheet(
-        corner_st=jnp.asarray(corner.astype(np.float32)), owner=cat(owners), chunk_obj=cat(c_obj),
-        chunk_level=cat(c_lvl), chunk_cx=cat(c_x), chunk_cy=cat(c_y), obj_res=i32(res),
-        obj_levels=i32(levels), obj_base=i32(base), n_chunks=int(n), max_levels=int(max_l),
-        level0_chunks=int(level0), sources=tuple(ch.source for ch in charts))
+        corner_st=jnp.asarray(corner.astype(np.float32)), owner=jnp.asarray(owner),
+        chunk_obj=cat(c_obj), chunk_level=cat(c_lvl), chunk_cx=cat(c_x), chunk_cy=cat(c_y),
+        obj_res=i32(res), obj_levels=i32(levels), obj_base=i32(base), n_chunks=int(n),
+        max_levels=int(max_l), level0_chunks=int(level0),
+        sources=tuple(ch.source for ch in charts))
     _CACHE[key] = sheet
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.popitem(last=False)

@@ -2,6 +2,14 @@
 (pixel, triangle) work items by a prefix sum, and the items are tested in chunks of a static
 capacity inside a ``lax.while_loop``. However many items a frame needs, all are processed: the
 capacity sets the chunk size (memory and compile shape), never what is kept.
+
+Triangles arrive by reference (``Triangles``: vertices, an index and a mask) with the function
+that sets them up; each traversal decides where the setup happens. The stored traversals set up
+every triangle once and gather the results per item; "recompute" (the GPU's) keeps only each
+triangle's item count and sets up again per item from its three vertices: on an H100 writing
+and gathering ~130 bytes of setup per triangle cost more than the arithmetic (2.6M triangles at
+1080p, 2026-11-23). Setup is a pure function of the vertices, so every traversal gets the same
+bits.
 """
 
 from __future__ import annotations
@@ -11,10 +19,33 @@ from typing import Callable
 import jax
 import jax.numpy as jnp
 
-from jaxrender.raster.setup import SUBPIXEL, TriSetup
+from jaxrender.raster.setup import SUBPIXEL, SetupFn, TriSetup
 from jaxrender.types import Array, pytree_dataclass
 
 EMPTY_KEY = (1 << 63) - 1  # no fragment: larger than every packed key
+SAFE_VERTEX = (0.0, 0.0, 0.0, 1.0)  # stands in for a masked slot's vertices; never covers
+
+
+@pytree_dataclass
+class Triangles:
+    """Triangle slots by reference: slot s has the clip-space vertices ``verts[index[s]]``
+    (float32[V, 4], int32[N, 3]), covers pixels only where ``ok[s]`` (bool[N]) and carries the
+    triangle id ``tri[s]`` (int32[N])."""
+
+    verts: Array
+    index: Array
+    ok: Array
+    tri: Array
+
+    def gather(self, slots: Array | None = None) -> tuple[Array, Array, Array]:
+        """(clip float32[n, 3, 4], ok, tri) of ``slots`` (every slot for None); a masked
+        slot's vertices are replaced by SAFE_VERTEX, so nothing downstream sees NaN or Inf."""
+        pick = (lambda a: a) if slots is None else (lambda a: a[slots])
+        ok = pick(self.ok)
+        tc = self.verts[pick(self.index)]
+        return jnp.where(ok[:, None, None], tc, jnp.asarray(SAFE_VERTEX, tc.dtype)), ok, pick(self.tri)
+
+
 
 
 @pytree_dataclass
@@ -90,46 +121,57 @@ def window_depth(e: list, z: list, inv_area: Array) -> Array:
 
 def _chunk(setup: TriSetup, incl: Array, base: Array, capacity: int, offset: Array) -> WorkChunk:
     slot, j, live = owners(setup.count, incl, base, capacity)
-    bw = setup.bw[slot]
+    return _items(jax.tree_util.tree_map(lambda a: a[slot], setup), slot, j, live, offset)
+
+
+def _items(su: TriSetup, slot: Array, j: Array, live: Array, offset: Array) -> WorkChunk:
+    """Work items from the setup of each item's own triangle (arrays of shape [capacity])."""
+    bw = su.bw
     row = jnp.floor((j.astype(jnp.float64) + 0.5) / bw.astype(jnp.float64)).astype(jnp.int32)
-    px = setup.x0[slot] + (j - row * bw)
-    py = setup.y0[slot] + row
+    px = su.x0 + (j - row * bw)
+    py = su.y0 + row
     sx = (px * SUBPIXEL).astype(jnp.float64) + offset[0].astype(jnp.float64)
     sy = (py * SUBPIXEL).astype(jnp.float64) + offset[1].astype(jnp.float64)
-    e = setup.edge_a[slot] * sx[:, None] + setup.edge_b[slot] * sy[:, None] + setup.edge_c[slot]
-    covered = live & jnp.all(e + setup.top_left[slot] > 0, axis=1)
-    z = setup.z[slot]
-    depth = window_depth([e[:, i] for i in range(3)], [z[:, i] for i in range(3)],
-                         setup.inv_area[slot])
-    return WorkChunk(slot, setup.tri[slot], px, py, covered, depth)
+    e = su.edge_a * sx[:, None] + su.edge_b * sy[:, None] + su.edge_c
+    covered = live & jnp.all(e + su.top_left > 0, axis=1)
+    z = su.z
+    depth = window_depth([e[:, i] for i in range(3)], [z[:, i] for i in range(3)], su.inv_area)
+    return WorkChunk(slot, su.tri, px, py, covered, depth)
+
+
+TRAVERSALS = ("auto", "bbox", "spans", "recompute")
 
 
 def for_each_chunk(
-    setup: TriSetup, capacity: int, offset: Array, state, fn: Callable[[object, WorkChunk], object],
-    traversal: str = "auto",
+    tris: Triangles, setup: SetupFn, capacity: int, offset: Array, state,
+    fn: Callable[[object, WorkChunk], object], traversal: str = "auto", auto_cpu: str = "spans",
+    auto_default: str = "recompute",
 ):
-    """Run ``state = fn(state, chunk)`` over the work items of the triangles in ``setup``, in
-    chunks (dynamic trip count). Both traversals hand ``fn`` the same covered items in the same
-    order with the same values (the box traversal also hands it uncovered items, masked by
-    ``covered``); ``traversal`` picks one: "bbox" (every bounding-box pixel is an item, tested
-    by the edge functions), "spans" (exact per-row spans; see ``spans.py``), or "auto": spans
-    on CPU, bounding boxes elsewhere (chosen when the program is lowered). ``spans`` is
-    imported here because it builds on this module."""
+    """Run ``state = fn(state, chunk)`` over the work items of ``tris``, in chunks (dynamic
+    trip count); returns (state, items: bounding-box pixels of the triangles). Every traversal
+    hands ``fn`` the same covered items in the same order with the same values (the box
+    traversals also hand it uncovered items, masked by ``covered``). ``traversal``: "bbox"
+    (every bounding-box pixel is an item, tested by the edge functions; setup stored),
+    "recompute" (the same items, setup recomputed per item), "spans" (exact per-row spans; see
+    ``spans.py``), or "auto": ``auto_cpu`` on CPU, ``auto_default`` elsewhere (chosen when the
+    program is lowered). ``spans`` is imported here because it builds on this module."""
+    if traversal not in TRAVERSALS:
+        raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
     if traversal == "auto":
-        from jaxrender.raster.spans import for_each_span_chunk
-
         return jax.lax.platform_dependent(
-            setup, offset, state,
-            cpu=lambda su, off, st: for_each_span_chunk(su, capacity, off, st, fn),
-            default=lambda su, off, st: _for_each_bbox_chunk(su, capacity, off, st, fn),
+            tris, offset, state,
+            cpu=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn, auto_cpu),
+            default=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn,
+                                                      auto_default),
         )
+    if traversal == "recompute":
+        return _for_each_recompute_chunk(tris, setup, capacity, offset, state, fn)
+    su = setup(*tris.gather(), offset)
     if traversal == "spans":
         from jaxrender.raster.spans import for_each_span_chunk
 
-        return for_each_span_chunk(setup, capacity, offset, state, fn)
-    if traversal != "bbox":
-        raise ValueError(f"traversal must be 'auto', 'bbox' or 'spans', got {traversal!r}")
-    return _for_each_bbox_chunk(setup, capacity, offset, state, fn)
+        return for_each_span_chunk(su, capacity, offset, state, fn), jnp.sum(su.count)
+    return _for_each_bbox_chunk(su, capacity, offset, state, fn)
 
 
 def _for_each_bbox_chunk(setup: TriSetup, capacity: int, offset: Array, state, fn):
@@ -140,7 +182,26 @@ def _for_each_bbox_chunk(setup: TriSetup, capacity: int, offset: Array, state, f
     def body(i, st):
         return fn(st, _chunk(setup, incl, i * capacity, capacity, offset))
 
-    return jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state)
+    return jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state), total
+
+
+def _for_each_recompute_chunk(tris: Triangles, setup: SetupFn, capacity: int, offset: Array,
+                              state, fn):
+    # Per triangle: the snapped vertices (the divisions and the vertex gathers, done once) and
+    # the item count; per item: the rest of the setup from its triangle's snapped vertices.
+    tri_clip, ok, tri = tris.gather()
+    snapped = setup.snap(tri_clip)
+    count = setup.from_snapped(*snapped, ok, tri, offset).count
+    incl = jnp.cumsum(count)
+    total = incl[-1]
+    n_chunks = (total + capacity - 1) // capacity
+
+    def body(i, st):
+        slot, j, live = owners(count, incl, i * capacity, capacity)
+        su = setup.from_snapped(*(a[slot] for a in snapped), ok[slot], tri[slot], offset)
+        return fn(st, _items(su, slot, j, live, offset))
+
+    return jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state), total
 
 
 def depth_key(depth: Array, tri: Array) -> Array:

@@ -16,13 +16,11 @@ import numpy as np
 
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.raster.clip import MAX_FAN, classify, clip_triangles
-from jaxrender.raster.coverage import EMPTY_KEY, depth_key, for_each_chunk
+from jaxrender.raster.coverage import EMPTY_KEY, SAFE_VERTEX, Triangles, depth_key, for_each_chunk
 from jaxrender.raster.resolve import resolve
-from jaxrender.raster.setup import SUBPIXEL_BITS, guard_band, setup_triangles
+from jaxrender.raster.setup import SUBPIXEL_BITS, SetupFn, guard_band
 from jaxrender.scene.camera import Camera, world_to_clip
 from jaxrender.types import Array, VisBuffer
-
-_SAFE_VERTEX = (0.0, 0.0, 0.0, 1.0)  # stands in for a dropped slot; never produces coverage
 
 
 def default_work_capacity(n_tris: int, width: int, height: int) -> int:
@@ -35,11 +33,18 @@ def default_work_capacity(n_tris: int, width: int, height: int) -> int:
     return int(min(max(1 << 16, -(-want // (1 << 16)) * (1 << 16)), 1 << 25))
 
 
-# Below this many pixels "auto" keeps the bounding-box traversal on every platform: the CPU's
-# span traversal pays for itself in run time on large frames (640x360 terrain: 56 -> 21 ms) but
+# Below this many pixels "auto" keeps the bounding-box traversal on the CPU: the span
+# traversal pays for itself in run time on large frames (640x360 terrain: 56 -> 21 ms) but
 # costs compile time (+1.3 s per rasterizing program on the 2-core CPU, measured 2026-11-22),
 # which dominates small frames (the quickstart at 128x72, the tests).
 SPANS_MIN_PIXELS = 1 << 16
+
+# Elsewhere (GPU) "auto" recomputes the setup per work item when there is at least one
+# triangle per this many pixels, and stores it otherwise. Kernel time per frame on an H100 at
+# 1920x1080 (2026-11-23), stored vs recomputed: 2.5k triangles 0.296 vs 0.351 ms, 164k 0.428 vs
+# 0.426, 655k 0.585 vs 0.507, 2.6M 1.370 vs 0.859: per item, recomputing costs more than
+# gathering when many items share a triangle, and saves the setup's writes when few do.
+RECOMPUTE_MIN_DENSITY = 16
 
 
 def default_clip_capacity(n_tris: int) -> int:
@@ -119,51 +124,52 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     clip plane follow, clipped in chunks of ``clip_cap``. Needs 64-bit types enabled.
     Returns (state, counts) with counts of work items (bounding-box pixels, whichever
     traversal runs), clipped and non-finite triangles. ``traversal``: see
-    ``coverage.for_each_chunk`` (a test hook; "auto" picks per platform, and bounding boxes
-    below SPANS_MIN_PIXELS).
+    ``coverage.for_each_chunk`` (a test hook; "auto" picks per platform, and on CPU bounding
+    boxes below SPANS_MIN_PIXELS).
     """
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
-    safe = jnp.asarray(_SAFE_VERTEX, jnp.float32)
-    if traversal == "auto" and width * height < SPANS_MIN_PIXELS:
-        traversal = "bbox"
+    safe = jnp.asarray(SAFE_VERTEX, jnp.float32)
+    auto = dict(auto_cpu="bbox" if width * height < SPANS_MIN_PIXELS else "spans",
+                auto_default="recompute" if n_tris * RECOMPUTE_MIN_DENSITY >= width * height
+                else "bbox")
+
+    setup = SetupFn(width, height, cull)
     with jax.named_scope("classify"):
-        tri_clip = clip[faces]  # [T, 3, 4]
+        tri_clip = clip[faces]  # [T, 3, 4]; fused into its users, not stored
         finite = jnp.all(jnp.isfinite(tri_clip), axis=(1, 2))
-        tri_clip = jnp.where(finite[:, None, None], tri_clip, safe)
-        inside, crossing = classify(tri_clip, guard)
+        inside, crossing = classify(jnp.where(finite[:, None, None], tri_clip, safe), guard)
         inside, crossing = inside & finite, crossing & finite
         n_cross = jnp.sum(crossing, dtype=jnp.int64)
-        rank = jnp.cumsum(crossing, dtype=jnp.int64) - 1
-    with jax.named_scope("setup"):
-        main_clip = jnp.where(inside[:, None, None], tri_clip, safe)
-        ids = jnp.arange(n_tris, dtype=jnp.int32)
-        main = setup_triangles(main_clip, inside, ids, width, height, offset, cull)
+    ids = jnp.arange(n_tris, dtype=jnp.int32)
     with jax.named_scope("coverage"):
-        state = for_each_chunk(main, capacity, offset, state, fn, traversal)
+        state, items = for_each_chunk(Triangles(clip, faces, inside, ids), setup, capacity,
+                                      offset, state, fn, traversal, **auto)
 
     def clip_chunk(k, carry):
         st, items = carry
         with jax.named_scope("clip"):
             # The crossing triangles of rank k*clip_cap ... (k+1)*clip_cap-1, each written to
             # its own slot (no jnp.nonzero: its scatter-add contends, see jaxrender.compaction).
+            rank = jnp.cumsum(crossing, dtype=jnp.int64) - 1
             local = rank - k * clip_cap
             dest = jnp.where(crossing & (local >= 0) & (local < clip_cap), local, clip_cap)
             idx = jnp.zeros((clip_cap,), jnp.int32).at[dest].set(
                 ids, mode="drop", unique_indices=True)
             live = jnp.arange(clip_cap) < n_cross - k * clip_cap
-            fan, fan_ok = clip_triangles(tri_clip[idx], guard)
+            cross_clip = jnp.where(finite[idx, None, None], clip[faces[idx]], safe)
+            fan, fan_ok = clip_triangles(cross_clip, guard)
             fan_ok = (fan_ok & live[:, None]).reshape(-1)
-            fan = jnp.where(fan_ok[:, None, None], fan.reshape(-1, 3, 4), safe)
-            fan_ids = jnp.repeat(idx.astype(jnp.int32), MAX_FAN)
-            s = setup_triangles(fan, fan_ok, fan_ids, width, height, offset, cull)
+            n_fan = fan_ok.shape[0]
+            fans = Triangles(fan.reshape(-1, 4), jnp.arange(3 * n_fan, dtype=jnp.int32)
+                             .reshape(n_fan, 3), fan_ok, jnp.repeat(idx, MAX_FAN))
         with jax.named_scope("coverage"):
-            st = for_each_chunk(s, capacity, offset, st, fn, traversal)
-        return st, items + jnp.sum(s.count)
+            st, n = for_each_chunk(fans, setup, capacity, offset, st, fn, traversal, **auto)
+        return st, items + n
 
     n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
     state, items = jax.lax.fori_loop(
-        jnp.int64(0), n_clip_chunks, clip_chunk, (state, jnp.sum(main.count))
+        jnp.int64(0), n_clip_chunks, clip_chunk, (state, items)
     )
     counts = {
         "work_items": items,

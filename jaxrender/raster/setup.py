@@ -50,15 +50,13 @@ class TriSetup:
 
 
 def snap(tri_clip: Array, width: int, height: int) -> tuple[Array, Array, Array]:
-    """float32[N, 3, 4] clip -> fixed-point X, Y (integer-valued float64[N, 3]) and window
-    depth float32[N, 3]."""
+    """float32[N, 3, 4] clip -> fixed-point X, Y (integer-valued float32[N, 3]: exact, since
+    the guard band keeps |X|, |Y| below 2^24) and window depth float32[N, 3]."""
     w = tri_clip[..., 3]
     xs = jnp.round((tri_clip[..., 0] / w + 1.0) * jnp.float32(width * SUBPIXEL // 2))
     ys = jnp.round((1.0 - tri_clip[..., 1] / w) * jnp.float32(height * SUBPIXEL // 2))
     z = (tri_clip[..., 2] / w) * 0.5 + 0.5
-    return xs.astype(jnp.float64), ys.astype(jnp.float64), z
-
-
+    return xs, ys, z
 
 
 def setup_triangles(
@@ -76,6 +74,15 @@ def setup_triangles(
     the centre). Must be called with 64-bit types enabled.
     """
     sx, sy, z = snap(tri_clip, width, height)
+    return setup_snapped(sx, sy, z, valid, tri_ids, width, height, offset, cull_backfaces)
+
+
+def setup_snapped(sx: Array, sy: Array, z: Array, valid: Array, tri_ids: Array, width: int,
+                  height: int, offset: Array, cull_backfaces: bool) -> TriSetup:
+    """``setup_triangles`` from snapped vertices (``snap``'s output): integer arithmetic only,
+    exact in float64, so it gives the same bits wherever it runs (the GPU's traversal runs it
+    per work item, see ``coverage.py``)."""
+    sx, sy = sx.astype(jnp.float64), sy.astype(jnp.float64)
     area2 = (sx[:, 1] - sx[:, 0]) * (sy[:, 2] - sy[:, 0]) - (sy[:, 1] - sy[:, 0]) * (
         sx[:, 2] - sx[:, 0]
     )
@@ -120,6 +127,24 @@ def setup_triangles(
         count=count,
         tri=tri_ids.astype(jnp.int32),
     )
+
+
+class SetupFn:
+    """Triangle setup for one frame size: ``setup(tri_clip, valid, ids, offset)`` (float32[n,
+    3, 4], bool[n], int32[n], int64[2]) -> TriSetup, in two steps, ``snap(tri_clip)`` then
+    ``from_snapped(sx, sy, z, valid, ids, offset)``."""
+
+    def __init__(self, width: int, height: int, cull_backfaces: bool):
+        self.width, self.height, self.cull = width, height, cull_backfaces
+
+    def snap(self, tri_clip: Array):
+        return snap(tri_clip, self.width, self.height)
+
+    def from_snapped(self, sx, sy, z, valid, ids, offset) -> TriSetup:
+        return setup_snapped(sx, sy, z, valid, ids, self.width, self.height, offset, self.cull)
+
+    def __call__(self, tri_clip, valid, ids, offset) -> TriSetup:
+        return self.from_snapped(*self.snap(tri_clip), valid, ids, offset)
 
 
 def concat_setups(parts: list[TriSetup]) -> TriSetup:

@@ -127,7 +127,7 @@ def info(root: Path | None = None) -> dict:
 
 def rebuild(study, *, log=print) -> int:
     """Re-render every reference frame a study needs; returns the number of frames."""
-    from jaxrender.study.runner import reference_frames, _scene_and_cameras
+    from jaxrender.study.runner import _scene_and_cameras, reference_frames
 
     n = 0
     for spec in study.scenes:

@@ -1,7 +1,7 @@
 """Compile study programs in spawned worker processes, so that tracing and lowering (Python,
 under the GIL) run in parallel and not only XLA's compile.
 
-Each job names a scene (``load_scene(source, params)``), a camera path (the first camera of
+Each job names a scene (``load_scene(source, params)``, or carries it loaded), a camera path (the first camera of
 ``make_cameras(scene, path, width, height)``), a render function and its config. The worker
 loads the scene itself (cached per worker), lowers and compiles the program exactly as
 ``timing.compile_render`` does in-process, and returns the executable serialized with
@@ -16,6 +16,10 @@ and sends ``extra`` (object_space's sheet) back pickled beside the executable.
 Every job that cannot go through a worker (unpicklable pieces, a worker error, an executable
 that does not serialize, a broken pool) is compiled by the caller's ``fallback`` in a thread
 instead, with a logged note: a program is never dropped.
+
+``JAXRENDER_COMPILE_TIMELINE=1`` makes each worker print one line per program to stderr: wall
+clock start and end, and the seconds spent getting the scene, lowering (with any host-side
+preparation) and compiling; what found the overview study's critical path (2026-11-23).
 
 Workers are started with "spawn" (never "fork": the parent has JAX/CUDA threads), without the
 parent's ``__main__`` (as ``jaxrender.figures.parallel`` does), with
@@ -67,6 +71,8 @@ class Job:
     resolution: tuple  # (width, height)
     render: Callable  # the pipeline's render function
     cfg: Any  # its config
+    scene: Any = None  # the loaded scene, when the parent has it: a worker then loads nothing
+    # (the room's shadow map alone was a rasterizer compile per worker, 2026-11-23)
 
 
 # ------------------------------------------------------------------ worker side
@@ -91,6 +97,8 @@ def _init_worker(config_values: dict) -> None:
 def _camera(job: Job):
     skey = (job.load_scene, job.source, job.scene_params)
     scene = _SCENES.get(skey)
+    if scene is None and job.scene is not None:
+        scene = _SCENES[skey] = job.scene
     if scene is None:
         scene = _SCENES[skey] = job.load_scene(job.source, dict(job.scene_params))
     ckey = skey + (job.make_cameras, job.path, tuple(job.resolution))
@@ -109,20 +117,32 @@ def compile_job(payload: bytes) -> bytes:
     from jax.experimental.serialize_executable import serialize
 
     job: Job = pickle.loads(payload)
+    _tl0, _tl0p = time.time(), time.perf_counter()
     scene, cam = _camera(job)
     parts = getattr(job.render, "compile_aot_parts", None)
     t0 = time.perf_counter()
     if parts is not None:
         jitted, args, extra = parts(scene, cam, job.cfg)
-        compiled = jitted.lower(*args).compile()
+        lowered = jitted.lower(*args)
+        _tl1 = time.perf_counter()
+        compiled = lowered.compile()
     else:
         extra = None
         try:
-            compiled = jax.jit(job.render, static_argnums=2).lower(scene, cam, job.cfg).compile()
+            lowered = jax.jit(job.render, static_argnums=2).lower(scene, cam, job.cfg)
+            _tl1 = time.perf_counter()
+            compiled = lowered.compile()
         except Exception:
             return pickle.dumps(("first_call",))
     ms = (time.perf_counter() - t0) * 1e3
     exe, in_tree, out_tree = serialize(compiled)
+    if os.environ.get("JAXRENDER_COMPILE_TIMELINE"):
+        import sys
+
+        print(f"TIMELINE pid={os.getpid()} {job.source} {type(job.cfg).__name__} "
+              f"start={_tl0:.2f} scene_s={t0 - _tl0p:.2f} lower_s={_tl1 - t0:.2f} "
+              f"compile_s={ms / 1e3 - (_tl1 - t0):.2f} end={time.time():.2f}",
+              file=sys.stderr, flush=True)
     return pickle.dumps(("aot", ms, exe, in_tree, out_tree, extra))
 
 

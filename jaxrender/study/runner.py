@@ -9,8 +9,8 @@ resolved config), ``environment.json`` (device, jax version, code version), ``su
 from __future__ import annotations
 
 import json
-import os
 import math
+import os
 import re
 import time
 from dataclasses import dataclass, field
@@ -174,7 +174,8 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
                 backend.load_scene, backend.make_cameras, spec.source,
                 tuple(dict(spec.params).items()), path, tuple(study.resolution),
                 backend.pipeline(pipe).render,
-                backend.make_config(pipe, *study.resolution, dict(params)))
+                backend.make_config(pipe, *study.resolution, dict(params)),
+                scenes[spec.label])
         except Exception:  # fn raises it again, where the thread path would
             return pool.submit(fn, *args)
         return procs.submit(label, job, lambda: fn(*args))

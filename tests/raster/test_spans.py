@@ -1,5 +1,6 @@
-"""The span traversal (CPU default) and the bounding-box traversal (GPU default) must give the
-same VisBuffer bit for bit, and the same fragments in the same order, on random scenes."""
+"""The traversals must give the same VisBuffer bit for bit, and the same fragments in the same
+order, on random scenes: spans (CPU default), bounding boxes with stored setup (CPU, small
+frames) and bounding boxes with setup recomputed per item (GPU default)."""
 
 import jax.numpy as jnp
 import numpy as np
@@ -36,7 +37,9 @@ def _assert_same(a, b, what):
 def test_spans_equal_bounding_boxes(rng, kind):
     clip, faces = _random_scene(rng, kind)
     cull = bool(rng.integers(2))
-    _assert_same(_vis(clip, faces, "spans", cull=cull), _vis(clip, faces, "bbox", cull=cull), kind)
+    ref = _vis(clip, faces, "bbox", cull=cull)
+    for tr in ("spans", "recompute"):
+        _assert_same(_vis(clip, faces, tr, cull=cull), ref, f"{kind}, {tr}")
 
 
 def test_spans_equal_bounding_boxes_clipped_msaa_and_tiny_chunks(rng):
@@ -48,8 +51,9 @@ def test_spans_equal_bounding_boxes_clipped_msaa_and_tiny_chunks(rng):
     pattern = samples.msaa(4)
     ref = _vis(clip, faces, "bbox", offsets=pattern)
     for work, clip_cap in ((1 << 16, 64), (512, 3)):
-        got = _vis(clip, faces, "spans", offsets=pattern, work=work, clip_cap=clip_cap)
-        _assert_same(got, ref, f"work={work}")
+        for tr in ("spans", "recompute"):
+            got = _vis(clip, faces, tr, offsets=pattern, work=work, clip_cap=clip_cap)
+            _assert_same(got, ref, f"{tr}, work={work}")
 
 
 def test_spans_list_the_same_fragments_in_the_same_order(rng):
@@ -59,9 +63,12 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
     out = {tr: fragments_jit(jnp.asarray(clip), jnp.asarray(faces), width=W, height=H,
                              capacity=cap, cull_backfaces=False, offset=(128, 128),
                              work_capacity=4096, clip_capacity=64, traversal=tr)
-           for tr in ("bbox", "spans")}
+           for tr in ("bbox", "spans", "recompute")}
     n = int(out["bbox"].count)
-    assert 0 < n <= cap and int(out["spans"].count) == n
-    for name in ("pixel", "tri", "depth"):
-        a, b = getattr(out["bbox"], name), getattr(out["spans"], name)
-        np.testing.assert_array_equal(np.asarray(b)[:n], np.asarray(a)[:n], err_msg=name)
+    assert 0 < n <= cap
+    for tr in ("spans", "recompute"):
+        assert int(out[tr].count) == n, tr
+        for name in ("pixel", "tri", "depth"):
+            a, b = getattr(out["bbox"], name), getattr(out[tr], name)
+            np.testing.assert_array_equal(np.asarray(b)[:n], np.asarray(a)[:n],
+                                          err_msg=f"{tr}: {name}")

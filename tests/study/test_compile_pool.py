@@ -116,16 +116,16 @@ def test_unpicklable_falls_back_to_threads(tiny_study, tmp_path, monkeypatch, ca
     _assert_bitwise(ref_t, ref_p)
 
 
-class BadLoader:
-    def __call__(self, source, params):
-        raise KeyError(f"no scene {source!r} in a worker")
+class BadCameras:
+    def __call__(self, scene, path, width, height):
+        raise KeyError(f"no camera path {path.name!r} in a worker")
 
 
 def test_worker_error_falls_back(tiny_study, tmp_path, monkeypatch, caplog):
-    # a loader that fails in the worker: every program is compiled in a thread instead
+    # cameras that fail in the worker: every program is compiled in a thread instead
     monkeypatch.setattr(backend, "load_scene", FakeLoader())
     plan = _plan(tiny_study)
-    monkeypatch.setattr(backend, "load_scene", BadLoader())
+    monkeypatch.setattr(backend, "make_cameras", BadCameras())
     with caplog.at_level(logging.WARNING, "jaxrender.study"):
         procs, _ = _compile(monkeypatch, "1", plan, tmp_path)
     notes = _notes(caplog)
