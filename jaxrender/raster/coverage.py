@@ -145,7 +145,7 @@ TRAVERSALS = ("auto", "bbox", "spans", "recompute")
 def for_each_chunk(
     tris: Triangles, setup: SetupFn, capacity: int, offset: Array, state,
     fn: Callable[[object, WorkChunk], object], traversal: str = "auto", auto_cpu: str = "spans",
-    auto_default: str = "recompute",
+    auto_default: str = "recompute", peel: bool = False,
 ):
     """Run ``state = fn(state, chunk)`` over the work items of ``tris``, in chunks (dynamic
     trip count); returns (state, items: bounding-box pixels of the triangles). Every traversal
@@ -154,7 +154,9 @@ def for_each_chunk(
     (every bounding-box pixel is an item, tested by the edge functions; setup stored),
     "recompute" (the same items, setup recomputed per item), "spans" (exact per-row spans; see
     ``spans.py``), or "auto": ``auto_cpu`` on CPU, ``auto_default`` elsewhere (chosen when the
-    program is lowered). ``spans`` is imported here because it builds on this module."""
+    program is lowered). ``peel``: the box traversals run their first chunk outside the loop
+    (see ``_chunk_loop``); "auto" peels on the GPU. ``spans`` is imported here because it
+    builds on this module."""
     if traversal not in TRAVERSALS:
         raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
     if traversal == "auto":
@@ -162,31 +164,43 @@ def for_each_chunk(
             tris, offset, state,
             cpu=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn, auto_cpu),
             default=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn,
-                                                      auto_default),
+                                                      auto_default, peel=True),
         )
     if traversal == "recompute":
-        return _for_each_recompute_chunk(tris, setup, capacity, offset, state, fn)
+        return _for_each_recompute_chunk(tris, setup, capacity, offset, state, fn, peel)
     su = setup(*tris.gather(), offset)
     if traversal == "spans":
         from jaxrender.raster.spans import for_each_span_chunk
 
         return for_each_span_chunk(su, capacity, offset, state, fn), jnp.sum(su.count)
-    return _for_each_bbox_chunk(su, capacity, offset, state, fn)
+    return _for_each_bbox_chunk(su, capacity, offset, state, fn, peel)
 
 
-def _for_each_bbox_chunk(setup: TriSetup, capacity: int, offset: Array, state, fn):
+def _chunk_loop(total: Array, capacity: int, state, body, peel: bool):
+    """``state = body(k, state)`` for the chunks k of ``total`` items. A loop with a dynamic
+    trip count makes the GPU wait for the host at every test of its condition; ``peel`` runs
+    chunk 0 unconditionally (its items are masked when there are none), so a frame whose items
+    fit one chunk tests the condition once instead of twice."""
+    n_chunks = (total + capacity - 1) // capacity
+    start = jnp.int64(0)
+    if peel:
+        state, start = body(start, state), jnp.int64(1)
+    return jax.lax.fori_loop(start, jnp.maximum(n_chunks, start), body, state)
+
+
+def _for_each_bbox_chunk(setup: TriSetup, capacity: int, offset: Array, state, fn,
+                         peel: bool = False):
     incl = jnp.cumsum(setup.count)
     total = incl[-1]
-    n_chunks = (total + capacity - 1) // capacity
 
     def body(i, st):
         return fn(st, _chunk(setup, incl, i * capacity, capacity, offset))
 
-    return jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state), total
+    return _chunk_loop(total, capacity, state, body, peel), total
 
 
 def _for_each_recompute_chunk(tris: Triangles, setup: SetupFn, capacity: int, offset: Array,
-                              state, fn):
+                              state, fn, peel: bool = False):
     # Per triangle: the snapped vertices (the divisions and the vertex gathers, done once) and
     # the item count; per item: the rest of the setup from its triangle's snapped vertices.
     tri_clip, ok, tri = tris.gather()
@@ -194,14 +208,13 @@ def _for_each_recompute_chunk(tris: Triangles, setup: SetupFn, capacity: int, of
     count = setup.from_snapped(*snapped, ok, tri, offset).count
     incl = jnp.cumsum(count)
     total = incl[-1]
-    n_chunks = (total + capacity - 1) // capacity
 
     def body(i, st):
         slot, j, live = owners(count, incl, i * capacity, capacity)
         su = setup.from_snapped(*(a[slot] for a in snapped), ok[slot], tri[slot], offset)
         return fn(st, _items(su, slot, j, live, offset))
 
-    return jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state), total
+    return _chunk_loop(total, capacity, state, body, peel), total
 
 
 def depth_key(depth: Array, tri: Array) -> Array:

@@ -72,3 +72,41 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
             a, b = getattr(out["bbox"], name), getattr(out[tr], name)
             np.testing.assert_array_equal(np.asarray(b)[:n], np.asarray(a)[:n],
                                           err_msg=f"{tr}: {name}")
+
+
+@pytest.mark.parametrize("traversal", ["bbox", "recompute"])
+def test_peeled_first_chunk_changes_nothing(rng, traversal):
+    # The GPU runs a box traversal's first chunk outside its loop: the same chunks, in the same
+    # order, must reach ``fn``, whether the items fill many chunks, one, or none at all.
+    import jax
+
+    from jaxrender.raster.coverage import Triangles, depth_key, for_each_chunk
+    from jaxrender.raster.setup import SetupFn
+
+    clip, faces = _random_scene(rng, "mixed_sizes")
+    n = faces.shape[0]
+
+    def run(ok, capacity, peel):
+        with jax.enable_x64(True):
+            def fn(st, c):
+                zb, order = st
+                pix = jnp.where(c.covered, c.py * W + c.px, W * H)
+                # order-sensitive: a running hash of the covered items, chunk by chunk
+                key = (c.tri.astype(jnp.int64) + 1) * (pix.astype(jnp.int64) + 7)
+                h = jnp.sum(jnp.where(c.covered, key, 0))
+                return zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop"), order * 31 + h
+
+            tris = Triangles(jnp.asarray(clip), jnp.asarray(faces), jnp.asarray(ok),
+                             jnp.arange(n, dtype=jnp.int32))
+            init = (jnp.full((W * H,), (1 << 63) - 1, jnp.int64), jnp.int64(0))
+            (zb, order), items = jax.jit(lambda t: for_each_chunk(
+                t, SetupFn(W, H, False), capacity, jnp.asarray([128, 128], jnp.int64), init,
+                fn, traversal, peel=peel))(tris)
+            return np.asarray(zb), int(order), int(items)
+
+    for ok, capacity in ((np.ones(n, bool), 256), (np.ones(n, bool), 1 << 20),
+                         (np.zeros(n, bool), 256)):
+        a, b = run(ok, capacity, False), run(ok, capacity, True)
+        np.testing.assert_array_equal(b[0], a[0], err_msg=f"capacity {capacity}: z-buffer")
+        assert b[1:] == a[1:], (capacity, a[1:], b[1:])
+    assert a[2] == 0  # the last case has no items: the peeled chunk was all masked
