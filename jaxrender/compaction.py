@@ -13,13 +13,14 @@ import jax.numpy as jnp
 from jaxrender.types import Array
 
 
-def compact_indices(mask: Array, size: int, fill_value: int = 0) -> tuple[Array, Array]:
+def compact_indices(mask: Array, size: int, fill_value: int = 0, start=0) -> tuple[Array, Array]:
     """(int32[size] indices of the True entries of bool[N] in increasing order, padded with
     ``fill_value``; their count int32, which may exceed ``size``: entries past it are not
-    listed)."""
+    listed). ``start`` (may be traced) skips the first ``start`` True entries, so that a loop
+    can list them ``size`` at a time."""
     mask = mask.reshape(-1)
-    rank = jnp.cumsum(mask, dtype=jnp.int32) - 1
-    dest = jnp.where(mask, rank, size)  # size: out of range, dropped
+    local = jnp.cumsum(mask, dtype=jnp.int32) - 1 - jnp.asarray(start, jnp.int32)
+    dest = jnp.where(mask & (local >= 0), local, size)  # size: out of range, dropped
     idx = jnp.full((size,), fill_value, jnp.int32).at[dest].set(
         jnp.arange(mask.shape[0], dtype=jnp.int32), mode="drop", unique_indices=True)
     return idx, jnp.sum(mask, dtype=jnp.int32)

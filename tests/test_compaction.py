@@ -19,3 +19,17 @@ def test_compact_indices_equals_flatnonzero(n, p, size):
     np.testing.assert_array_equal(np.asarray(idx[:k]), want[:k],
                                   err_msg="listed indices differ from flatnonzero")
     np.testing.assert_array_equal(np.asarray(idx[k:]), -7, err_msg="padding is not fill_value")
+
+
+@pytest.mark.parametrize("start", [0, 37, 300, 10_000])
+def test_compact_indices_window(start):
+    # a loop lists the True entries `size` at a time: window [start, start + size) of them
+    rng = np.random.default_rng(start)
+    mask = rng.random(2000) < 0.4
+    idx, count = compact_indices(jnp.asarray(mask), 64, fill_value=-1, start=jnp.int32(start))
+    want = np.flatnonzero(mask)[start:start + 64]
+    assert int(count) == int(mask.sum()), "count must be the total, whatever the window"
+    np.testing.assert_array_equal(np.asarray(idx[:want.size]), want,
+                                  err_msg=f"window at {start} differs from flatnonzero")
+    np.testing.assert_array_equal(np.asarray(idx[want.size:]), -1,
+                                  err_msg="padding is not fill_value")

@@ -43,9 +43,8 @@ class Triangles:
         pick = (lambda a: a) if slots is None else (lambda a: a[slots])
         ok = pick(self.ok)
         tc = self.verts[pick(self.index)]
-        return jnp.where(ok[:, None, None], tc, jnp.asarray(SAFE_VERTEX, tc.dtype)), ok, pick(self.tri)
-
-
+        safe = jnp.asarray(SAFE_VERTEX, tc.dtype)
+        return jnp.where(ok[:, None, None], tc, safe), ok, pick(self.tri)
 
 
 @pytree_dataclass

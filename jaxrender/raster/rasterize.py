@@ -8,15 +8,17 @@ size, not a limit: work beyond it runs in further iterations of a loop inside th
 
 from __future__ import annotations
 
+import dataclasses
 from functools import partial
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxrender.compaction import compact_indices
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.raster.clip import MAX_FAN, classify, clip_triangles
-from jaxrender.raster.coverage import EMPTY_KEY, SAFE_VERTEX, Triangles, depth_key, for_each_chunk
+from jaxrender.raster.coverage import EMPTY_KEY, Triangles, depth_key, for_each_chunk
 from jaxrender.raster.resolve import resolve
 from jaxrender.raster.setup import SUBPIXEL_BITS, SetupFn, guard_band
 from jaxrender.scene.camera import Camera, world_to_clip
@@ -129,36 +131,30 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     """
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
-    safe = jnp.asarray(SAFE_VERTEX, jnp.float32)
     auto = dict(auto_cpu="bbox" if width * height < SPANS_MIN_PIXELS else "spans",
                 auto_default="recompute" if n_tris * RECOMPUTE_MIN_DENSITY >= width * height
                 else "bbox")
 
     setup = SetupFn(width, height, cull)
     with jax.named_scope("classify"):
-        tri_clip = clip[faces]  # [T, 3, 4]; fused into its users, not stored
-        finite = jnp.all(jnp.isfinite(tri_clip), axis=(1, 2))
-        inside, crossing = classify(jnp.where(finite[:, None, None], tri_clip, safe), guard)
+        # clip[faces] is gathered where it is used (fused), never stored.
+        finite = jnp.all(jnp.isfinite(clip[faces]), axis=(1, 2))
+        source = Triangles(clip, faces, finite, jnp.arange(n_tris, dtype=jnp.int32))
+        inside, crossing = classify(source.gather()[0], guard)
         inside, crossing = inside & finite, crossing & finite
         n_cross = jnp.sum(crossing, dtype=jnp.int64)
-    ids = jnp.arange(n_tris, dtype=jnp.int32)
     with jax.named_scope("coverage"):
-        state, items = for_each_chunk(Triangles(clip, faces, inside, ids), setup, capacity,
+        state, items = for_each_chunk(dataclasses.replace(source, ok=inside), setup, capacity,
                                       offset, state, fn, traversal, **auto)
 
     def clip_chunk(k, carry):
         st, items = carry
         with jax.named_scope("clip"):
-            # The crossing triangles of rank k*clip_cap ... (k+1)*clip_cap-1, each written to
-            # its own slot (no jnp.nonzero: its scatter-add contends, see jaxrender.compaction).
-            rank = jnp.cumsum(crossing, dtype=jnp.int64) - 1
-            local = rank - k * clip_cap
-            dest = jnp.where(crossing & (local >= 0) & (local < clip_cap), local, clip_cap)
-            idx = jnp.zeros((clip_cap,), jnp.int32).at[dest].set(
-                ids, mode="drop", unique_indices=True)
+            # The crossing triangles of rank k*clip_cap ... (k+1)*clip_cap-1. Listed here, in
+            # the loop, so that a frame without crossings pays nothing for the list.
+            idx, _ = compact_indices(crossing, clip_cap, start=k * clip_cap)
             live = jnp.arange(clip_cap) < n_cross - k * clip_cap
-            cross_clip = jnp.where(finite[idx, None, None], clip[faces[idx]], safe)
-            fan, fan_ok = clip_triangles(cross_clip, guard)
+            fan, fan_ok = clip_triangles(source.gather(idx)[0], guard)
             fan_ok = (fan_ok & live[:, None]).reshape(-1)
             n_fan = fan_ok.shape[0]
             fans = Triangles(fan.reshape(-1, 4), jnp.arange(3 * n_fan, dtype=jnp.int32)

@@ -16,7 +16,6 @@ In these y-down coordinates a GL front face (counter-clockwise in NDC) has negat
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
 from jaxrender.types import Array, pytree_dataclass
@@ -145,7 +144,3 @@ class SetupFn:
 
     def __call__(self, tri_clip, valid, ids, offset) -> TriSetup:
         return self.from_snapped(*self.snap(tri_clip), valid, ids, offset)
-
-
-def concat_setups(parts: list[TriSetup]) -> TriSetup:
-    return jax.tree_util.tree_map(lambda *xs: jnp.concatenate(xs, axis=0), *parts)

@@ -117,31 +117,32 @@ def compile_job(payload: bytes) -> bytes:
     from jax.experimental.serialize_executable import serialize
 
     job: Job = pickle.loads(payload)
-    _tl0, _tl0p = time.time(), time.perf_counter()
+    started, t_start = time.time(), time.perf_counter()
     scene, cam = _camera(job)
     parts = getattr(job.render, "compile_aot_parts", None)
     t0 = time.perf_counter()
-    if parts is not None:
-        jitted, args, extra = parts(scene, cam, job.cfg)
-        lowered = jitted.lower(*args)
-        _tl1 = time.perf_counter()
-        compiled = lowered.compile()
-    else:
-        extra = None
-        try:
+    try:
+        if parts is not None:
+            jitted, args, extra = parts(scene, cam, job.cfg)
+            lowered = jitted.lower(*args)
+        else:
+            extra = None
             lowered = jax.jit(job.render, static_argnums=2).lower(scene, cam, job.cfg)
-            _tl1 = time.perf_counter()
-            compiled = lowered.compile()
-        except Exception:
-            return pickle.dumps(("first_call",))
-    ms = (time.perf_counter() - t0) * 1e3
+        t_lowered = time.perf_counter()
+        compiled = lowered.compile()
+    except Exception:
+        if parts is not None:  # a pipeline with host preparation: the pool's fallback decides
+            raise
+        return pickle.dumps(("first_call",))
+    t_end = time.perf_counter()
+    ms = (t_end - t0) * 1e3
     exe, in_tree, out_tree = serialize(compiled)
     if os.environ.get("JAXRENDER_COMPILE_TIMELINE"):
         import sys
 
         print(f"TIMELINE pid={os.getpid()} {job.source} {type(job.cfg).__name__} "
-              f"start={_tl0:.2f} scene_s={t0 - _tl0p:.2f} lower_s={_tl1 - t0:.2f} "
-              f"compile_s={ms / 1e3 - (_tl1 - t0):.2f} end={time.time():.2f}",
+              f"start={started:.2f} scene_s={t0 - t_start:.2f} lower_s={t_lowered - t0:.2f} "
+              f"compile_s={t_end - t_lowered:.2f} end={started + t_end - t_start:.2f}",
               file=sys.stderr, flush=True)
     return pickle.dumps(("aot", ms, exe, in_tree, out_tree, extra))
 
