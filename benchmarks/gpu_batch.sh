@@ -68,7 +68,7 @@ STEPS=${*:-raster metrics peers scale bench pipelines}
 if [ -n "${QUICK:-}" ]; then  # tiny sizes: checks the plumbing on a CPU
   step raster 300 python3 benchmarks/bench_raster.py --preset cpu --repeats 2 --brute-size 64x36 --json "$OUT/raster.json"
   step metrics 300 python3 benchmarks/bench_metrics.py --width 64 --height 36 --frames 2 --repeats 2 --lib-frames 1 --only psnr ssim
-  step peers 300 python3 benchmarks/bench_peers.py --tiny --repeats 2 --draws 3 --json "$OUT/peers.json"
+  step peers 300 python3 benchmarks/bench_peers.py --tiny --repeats 2 --draws 3 --jaxrender-repeats 5 --json "$OUT/peers.json"
   step scale 400 python3 benchmarks/bench_scale.py --resolution 48x27 --frames 2 --chunk 1 --repeats 1 --raster-triangles 2000 --pipelines forward --sweep 0 --scene spheres --json "$OUT/scale.json"
   step bench 400 python3 -m jaxrender.bench --quick --sections raster pipelines --pipelines forward --json "$OUT/bench.json"
   [ -f benchmarks/bench_pipelines.py ] && step pipelines 300 python3 benchmarks/bench_pipelines.py --scenes spheres --variants forward --width 32 --height 18 --repeats 1

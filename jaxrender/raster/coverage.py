@@ -144,7 +144,7 @@ TRAVERSALS = ("auto", "bbox", "spans", "recompute")
 def for_each_chunk(
     tris: Triangles, setup: SetupFn, capacity: int, offset: Array, state,
     fn: Callable[[object, WorkChunk], object], traversal: str = "auto", auto_cpu: str = "spans",
-    auto_default: str = "recompute", peel: bool = False,
+    auto_default: str = "recompute", peel: bool = False, then: tuple | None = None,
 ):
     """Run ``state = fn(state, chunk)`` over the work items of ``tris``, in chunks (dynamic
     trip count); returns (state, items: bounding-box pixels of the triangles). Every traversal
@@ -154,52 +154,75 @@ def for_each_chunk(
     "recompute" (the same items, setup recomputed per item), "spans" (exact per-row spans; see
     ``spans.py``), or "auto": ``auto_cpu`` on CPU, ``auto_default`` elsewhere (chosen when the
     program is lowered). ``peel``: the box traversals run their first chunk outside the loop
-    (see ``_chunk_loop``); "auto" peels on the GPU. ``spans`` is imported here because it
+    and join ``then`` into it (see ``_chunk_loop``); "auto" peels on the GPU. ``then``: more
+    work after the chunks, (n: int64 scalar, body(k, (state, items)) -> (state, items)) for
+    k in [0, n); its items are added to the count. ``spans`` is imported here because it
     builds on this module."""
     if traversal not in TRAVERSALS:
         raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
     if traversal == "auto":
         return jax.lax.platform_dependent(
             tris, offset, state,
-            cpu=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn, auto_cpu),
+            cpu=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn, auto_cpu,
+                                                  then=then),
             default=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn,
-                                                      auto_default, peel=True),
+                                                      auto_default, peel=True, then=then),
         )
     if traversal == "recompute":
-        return _for_each_recompute_chunk(tris, setup, capacity, offset, state, fn, peel)
+        return _for_each_recompute_chunk(tris, setup, capacity, offset, state, fn, peel, then)
     su = setup(*tris.gather(), offset)
     if traversal == "spans":
         from jaxrender.raster.spans import for_each_span_chunk
 
-        return for_each_span_chunk(su, capacity, offset, state, fn), jnp.sum(su.count)
-    return _for_each_bbox_chunk(su, capacity, offset, state, fn, peel)
+        state = for_each_span_chunk(su, capacity, offset, state, fn)
+        return _then_loop(then, jnp.int64(0), state, jnp.sum(su.count))
+    return _for_each_bbox_chunk(su, capacity, offset, state, fn, peel, then)
 
 
-def _chunk_loop(total: Array, capacity: int, state, body, peel: bool):
-    """``state = body(k, state)`` for the chunks k of ``total`` items. A loop with a dynamic
-    trip count makes the GPU wait for the host at every test of its condition; ``peel`` runs
-    chunk 0 unconditionally (its items are masked when there are none), so a frame whose items
-    fit one chunk tests the condition once instead of twice."""
+def _then_loop(then, start, state, items):
+    if then is None:
+        return state, items
+    n, body = then
+    return jax.lax.fori_loop(start, n, body, (state, items))
+
+
+def _chunk_loop(total: Array, capacity: int, state, body, peel: bool, then):
+    """``state = body(k, state)`` for the chunks k of ``total`` items, then ``then``; returns
+    (state, total + the items ``then`` adds). A loop with a dynamic trip count makes the GPU
+    wait for the host at every test of its condition. ``peel`` runs chunk 0 unconditionally
+    (its items are masked when there are none) and runs the further chunks and ``then``'s
+    steps in one loop, choosing per step, so that a frame whose items fit one chunk and which
+    has no ``then`` work tests one condition instead of two or three."""
     n_chunks = (total + capacity - 1) // capacity
-    start = jnp.int64(0)
-    if peel:
-        state, start = body(start, state), jnp.int64(1)
-    return jax.lax.fori_loop(start, jnp.maximum(n_chunks, start), body, state)
+    if not peel:
+        state = jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state)
+        return _then_loop(then, jnp.int64(0), state, total)
+    state = body(jnp.int64(0), state)
+    n_more = jnp.maximum(n_chunks, 1)
+    if then is None:
+        return jax.lax.fori_loop(jnp.int64(1), n_more, body, state), total
+    n_then, then_body = then
+
+    def step(k, carry):
+        return jax.lax.cond(k < n_more, lambda: (body(k, carry[0]), carry[1]),
+                            lambda: then_body(k - n_more, carry))
+
+    return jax.lax.fori_loop(jnp.int64(1), n_more + n_then, step, (state, total))
 
 
 def _for_each_bbox_chunk(setup: TriSetup, capacity: int, offset: Array, state, fn,
-                         peel: bool = False):
+                         peel: bool = False, then=None):
     incl = jnp.cumsum(setup.count)
     total = incl[-1]
 
     def body(i, st):
         return fn(st, _chunk(setup, incl, i * capacity, capacity, offset))
 
-    return _chunk_loop(total, capacity, state, body, peel), total
+    return _chunk_loop(total, capacity, state, body, peel, then)
 
 
 def _for_each_recompute_chunk(tris: Triangles, setup: SetupFn, capacity: int, offset: Array,
-                              state, fn, peel: bool = False):
+                              state, fn, peel: bool = False, then=None):
     # Per triangle: the snapped vertices (the divisions and the vertex gathers, done once) and
     # the item count; per item: the rest of the setup from its triangle's snapped vertices.
     tri_clip, ok, tri = tris.gather()
@@ -213,7 +236,7 @@ def _for_each_recompute_chunk(tris: Triangles, setup: SetupFn, capacity: int, of
         su = setup.from_snapped(*(a[slot] for a in snapped), ok[slot], tri[slot], offset)
         return fn(st, _items(su, slot, j, live, offset))
 
-    return _chunk_loop(total, capacity, state, body, peel), total
+    return _chunk_loop(total, capacity, state, body, peel, then)
 
 
 def depth_key(depth: Array, tri: Array) -> Array:

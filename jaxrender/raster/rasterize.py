@@ -19,10 +19,10 @@ from jaxrender.compaction import compact_indices
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.raster.clip import MAX_FAN, classify, clip_triangles
 from jaxrender.raster.coverage import EMPTY_KEY, Triangles, depth_key, for_each_chunk
-from jaxrender.raster.resolve import resolve
+from jaxrender.raster.resolve import decode_keys, resolve
 from jaxrender.raster.setup import SUBPIXEL_BITS, SetupFn, guard_band
 from jaxrender.scene.camera import Camera, world_to_clip
-from jaxrender.types import Array, VisBuffer
+from jaxrender.types import Array, Counts, DepthBuffer, VisBuffer
 
 
 def default_work_capacity(n_tris: int, width: int, height: int) -> int:
@@ -71,6 +71,21 @@ def rasterize_clip(
     in [0, 1)^2 (see ``jaxrender.raster.samples``). Triangles with a NaN or infinite vertex are
     dropped and counted in ``counts['dropped_nonfinite']``; other bad input raises ValueError.
     """
+    return _rasterize_checked(clip, faces, width, height, True, cull_backfaces, sample_offsets,
+                              work_capacity, clip_capacity)
+
+
+def rasterize_depth_clip(clip: Array, faces: Array, width: int, height: int,
+                         **kwargs) -> DepthBuffer:
+    """``rasterize_clip`` without barycentrics: the nearest triangle's id and depth per pixel
+    (bit for bit those of the VisBuffer), for a depth pre-pass, a shadow map or an id buffer.
+    Skips the resolve step and two thirds of the output (at 1080p on an H100 the resolve's
+    kernels took 0.07 of 0.29 ms, 2026-11-23)."""
+    return _rasterize_checked(clip, faces, width, height, False, **kwargs)
+
+
+def _rasterize_checked(clip, faces, width, height, barycentrics, cull_backfaces=False,
+                       sample_offsets=None, work_capacity=None, clip_capacity=None):
     width, height = _check_size(width, height)
     offsets = sample_patterns.validate(sample_offsets or sample_patterns.CENTER)
     _check_mesh(clip, faces, "clip", 4)
@@ -84,6 +99,7 @@ def rasterize_clip(
         offsets=sample_patterns.to_fixed(offsets, SUBPIXEL_BITS),
         work_capacity=int(work_capacity or default_work_capacity(n_tris, width, height)),
         clip_capacity=int(clip_capacity or default_clip_capacity(n_tris)),
+        barycentrics=barycentrics,
     )
 
 
@@ -91,10 +107,22 @@ def rasterize(
     positions: Array, faces: Array, camera: Camera, width: int, height: int, **kwargs
 ) -> VisBuffer:
     """Rasterize world-space positions float32[V, 3] seen through ``camera`` (see rasterize_clip)."""
+    return rasterize_clip(_world_clip(positions, faces, camera, width, height), faces, width,
+                          height, **kwargs)
+
+
+def rasterize_depth(
+    positions: Array, faces: Array, camera: Camera, width: int, height: int, **kwargs
+) -> DepthBuffer:
+    """World-space ``rasterize_depth_clip``: ids and depth, no barycentrics."""
+    return rasterize_depth_clip(_world_clip(positions, faces, camera, width, height), faces,
+                                width, height, **kwargs)
+
+
+def _world_clip(positions, faces, camera, width, height):
     width, height = _check_size(width, height)
     _check_mesh(positions, faces, "positions", 3)
-    clip = world_to_clip(jnp.asarray(positions, jnp.float32), camera, width / height)
-    return rasterize_clip(clip, faces, width, height, **kwargs)
+    return world_to_clip(jnp.asarray(positions, jnp.float32), camera, width / height)
 
 
 @partial(
@@ -107,14 +135,15 @@ def rasterize(
         "work_capacity",
         "clip_capacity",
         "traversal",
+        "barycentrics",
     ),
 )
 def _rasterize(clip, faces, *, width, height, cull_backfaces, offsets, work_capacity, clip_capacity,
-               traversal="auto"):
+               traversal="auto", barycentrics=True):
     with jax.enable_x64(True):
         return _rasterize_x64(
             clip, faces, width, height, cull_backfaces, offsets, work_capacity, clip_capacity,
-            traversal,
+            traversal, barycentrics,
         )
 
 
@@ -127,13 +156,15 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     Returns (state, counts) with counts of work items (bounding-box pixels, whichever
     traversal runs), clipped and non-finite triangles. ``traversal``: see
     ``coverage.for_each_chunk`` (a test hook; "auto" picks per platform, and on CPU bounding
-    boxes below SPANS_MIN_PIXELS).
+    boxes below SPANS_MIN_PIXELS), or "gpu": what "auto" runs on a GPU, on any platform.
     """
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
     auto = dict(auto_cpu="bbox" if width * height < SPANS_MIN_PIXELS else "spans",
                 auto_default="recompute" if n_tris * RECOMPUTE_MIN_DENSITY >= width * height
                 else "bbox")
+    if traversal == "gpu":
+        traversal, auto = auto["auto_default"], dict(auto, peel=True)
 
     setup = SetupFn(width, height, cull)
     with jax.named_scope("classify"):
@@ -142,10 +173,8 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
         source = Triangles(clip, faces, finite, jnp.arange(n_tris, dtype=jnp.int32))
         inside, crossing = classify(source.gather()[0], guard)
         inside, crossing = inside & finite, crossing & finite
-        n_cross = jnp.sum(crossing, dtype=jnp.int64)
-    with jax.named_scope("coverage"):
-        state, items = for_each_chunk(dataclasses.replace(source, ok=inside), setup, capacity,
-                                      offset, state, fn, traversal, **auto)
+        # From a materialised copy, as dropped_nonfinite below (12 us at 1080p, 2.5k triangles).
+        n_cross = jnp.sum(jax.lax.optimization_barrier(crossing), dtype=jnp.int64)
 
     def clip_chunk(k, carry):
         st, items = carry
@@ -163,20 +192,25 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
             st, n = for_each_chunk(fans, setup, capacity, offset, st, fn, traversal, **auto)
         return st, items + n
 
+    # The clip chunks run as the coverage loop's ``then``: on the GPU, in the same loop.
     n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
-    state, items = jax.lax.fori_loop(
-        jnp.int64(0), n_clip_chunks, clip_chunk, (state, items)
-    )
+    with jax.named_scope("coverage"):
+        state, items = for_each_chunk(dataclasses.replace(source, ok=inside), setup, capacity,
+                                      offset, state, fn, traversal,
+                                      then=(n_clip_chunks, clip_chunk), **auto)
     counts = {
         "work_items": items,
         "clipped": n_cross,
-        "dropped_nonfinite": jnp.sum(~finite, dtype=jnp.int64),
+        # Summed from a materialised copy of the mask: otherwise XLA GPU fuses this scalar sum
+        # with the triangle setup, which then runs inside the reduction's one thread block
+        # (28 us of a 0.1 ms frame at 640x360 on an H100, 2026-11-23).
+        "dropped_nonfinite": jnp.sum(~jax.lax.optimization_barrier(finite), dtype=jnp.int64),
     }
     return state, counts
 
 
 def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap,
-                   traversal="auto") -> VisBuffer:
+                   traversal="auto", barycentrics=True) -> VisBuffer | DepthBuffer:
     def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
         n_pix = width * height
 
@@ -192,8 +226,11 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
             (zbuf, jnp.int64(0)), scatter_min, traversal,
         )
         with jax.named_scope("resolve"):
-            off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
-            vis = resolve(zbuf, clip, faces, width, height, off_px)
+            if not barycentrics:
+                vis = DepthBuffer(*decode_keys(zbuf, width, height))
+            else:
+                off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
+                vis = resolve(zbuf, clip, faces, width, height, off_px)
         return vis, dict(counts, fragments=frags)
 
     offs = jnp.asarray(offsets, jnp.int64)
@@ -203,8 +240,7 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
         vis, counts = jax.lax.map(one_sample, offs)
         counts = {k: jnp.sum(v) if k in ("fragments", "work_items") else v[0]
                   for k, v in counts.items()}
-    counts = {k: v.astype(jnp.int32) for k, v in counts.items()}
-    return VisBuffer(vis.tri_id, vis.depth, vis.bary, vis.dbary_dx, vis.dbary_dy, counts)
+    return dataclasses.replace(vis, counts=Counts.pack(counts))
 
 
 def _check_size(width, height) -> tuple[int, int]:

@@ -21,13 +21,19 @@ def resolve(
     zbuf: Array, clip: Array, faces: Array, width: int, height: int, offset_px: Array
 ) -> VisBuffer:
     """zbuf int64[H*W] -> VisBuffer. ``offset_px``: float32[2] sample offset inside the pixel."""
+    tri, depth = decode_keys(zbuf, width, height)
+    bary, ddx, ddy = barycentrics(tri, clip, faces, width, height, offset_px)
+    return VisBuffer(tri_id=tri, depth=depth, bary=bary, dbary_dx=ddx, dbary_dy=ddy)
+
+
+def decode_keys(zbuf: Array, width: int, height: int) -> tuple[Array, Array]:
+    """zbuf int64[H*W] of packed (depth, id) keys -> (tri_id int32[H, W], -1 where empty;
+    depth float32[H, W], 1.0 where empty)."""
     empty = zbuf == EMPTY_KEY
     tri = jnp.where(empty, -1, (zbuf & 0xFFFFFFFF).astype(jnp.int32)).reshape(height, width)
     depth_bits = (zbuf >> 32).astype(jnp.int32)
     depth = jnp.where(empty, 1.0, jax.lax.bitcast_convert_type(depth_bits, jnp.float32))
-    depth = depth.reshape(height, width)
-    bary, ddx, ddy = barycentrics(tri, clip, faces, width, height, offset_px)
-    return VisBuffer(tri_id=tri, depth=depth, bary=bary, dbary_dx=ddx, dbary_dy=ddy)
+    return tri, depth.reshape(height, width)
 
 
 def barycentrics_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, width: int,

@@ -1,5 +1,5 @@
 """Directional shadow map: an orthographic depth pass from the first directional light, drawn
-with the shared rasterizer (``rasterize_clip`` on our own clip coordinates), and its lookup."""
+with the shared rasterizer (``rasterize_depth_clip`` on our own clip coordinates), and its lookup."""
 
 from __future__ import annotations
 
@@ -39,14 +39,14 @@ def _light_space(points: Array, sm_origin, basis, half) -> Array:
 def render_shadow_map(scene: Scene, size: int) -> ShadowMap:
     """One compiled program (light frame, transform, raster): done op by op it compiled ~57
     small programs besides the rasterizer's (12 s of the room scene's load, 2026-11-23)."""
-    from jaxrender.raster import rasterize_clip
+    from jaxrender.raster import rasterize_depth_clip
 
     if scene.lights.dir_to_light.shape[0] == 0:
         raise ValueError(f"scene {scene.name!r}: shadows need a directional light")
     origin, basis, half = light_frame(scene)
     q = _light_space(scene.positions, origin, basis, half)
     clip = jnp.concatenate([q[:, :2], -q[:, 2:3], jnp.ones_like(q[:, :1])], axis=-1)
-    vis = rasterize_clip(clip, scene.faces, size, size)
+    vis = rasterize_depth_clip(clip, scene.faces, size, size)
     return ShadowMap(depth=vis.depth, origin=origin, basis=basis, half_extent=half)
 
 

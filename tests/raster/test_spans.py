@@ -51,7 +51,7 @@ def test_spans_equal_bounding_boxes_clipped_msaa_and_tiny_chunks(rng):
     pattern = samples.msaa(4)
     ref = _vis(clip, faces, "bbox", offsets=pattern)
     for work, clip_cap in ((1 << 16, 64), (512, 3)):
-        for tr in ("spans", "recompute"):
+        for tr in ("spans", "recompute", "gpu"):
             got = _vis(clip, faces, tr, offsets=pattern, work=work, clip_cap=clip_cap)
             _assert_same(got, ref, f"{tr}, work={work}")
 
@@ -76,8 +76,9 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
 
 @pytest.mark.parametrize("traversal", ["bbox", "recompute"])
 def test_peeled_first_chunk_changes_nothing(rng, traversal):
-    # The GPU runs a box traversal's first chunk outside its loop: the same chunks, in the same
-    # order, must reach ``fn``, whether the items fill many chunks, one, or none at all.
+    # The GPU runs a box traversal's first chunk outside its loop and the later chunks and the
+    # ``then`` steps (the clip chunks) in one loop: the same chunks and steps, in the same
+    # order, must run, whether the items fill many chunks, one, or none at all.
     import jax
 
     from jaxrender.raster.coverage import Triangles, depth_key, for_each_chunk
@@ -86,7 +87,7 @@ def test_peeled_first_chunk_changes_nothing(rng, traversal):
     clip, faces = _random_scene(rng, "mixed_sizes")
     n = faces.shape[0]
 
-    def run(ok, capacity, peel):
+    def run(ok, capacity, peel, n_then):
         with jax.enable_x64(True):
             def fn(st, c):
                 zb, order = st
@@ -96,17 +97,23 @@ def test_peeled_first_chunk_changes_nothing(rng, traversal):
                 h = jnp.sum(jnp.where(c.covered, key, 0))
                 return zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop"), order * 31 + h
 
+            def then_body(k, carry):  # stands in for the clip chunks: order-sensitive too
+                (zb, order), items = carry
+                return (zb, order * 37 + k + 1), items + 10 * (k + 1)
+
             tris = Triangles(jnp.asarray(clip), jnp.asarray(faces), jnp.asarray(ok),
                              jnp.arange(n, dtype=jnp.int32))
             init = (jnp.full((W * H,), (1 << 63) - 1, jnp.int64), jnp.int64(0))
-            (zb, order), items = jax.jit(lambda t: for_each_chunk(
+            (zb, order), items = jax.jit(lambda t, m: for_each_chunk(
                 t, SetupFn(W, H, False), capacity, jnp.asarray([128, 128], jnp.int64), init,
-                fn, traversal, peel=peel))(tris)
+                fn, traversal, peel=peel, then=(m, then_body)))(tris, jnp.int64(n_then))
             return np.asarray(zb), int(order), int(items)
 
     for ok, capacity in ((np.ones(n, bool), 256), (np.ones(n, bool), 1 << 20),
                          (np.zeros(n, bool), 256)):
-        a, b = run(ok, capacity, False), run(ok, capacity, True)
-        np.testing.assert_array_equal(b[0], a[0], err_msg=f"capacity {capacity}: z-buffer")
-        assert b[1:] == a[1:], (capacity, a[1:], b[1:])
-    assert a[2] == 0  # the last case has no items: the peeled chunk was all masked
+        for n_then in (0, 3):
+            a, b = run(ok, capacity, False, n_then), run(ok, capacity, True, n_then)
+            what = f"capacity {capacity}, {n_then} more steps"
+            np.testing.assert_array_equal(b[0], a[0], err_msg=f"{what}: z-buffer")
+            assert b[1:] == a[1:], (what, a[1:], b[1:])
+    assert a[2] == 60  # the last case has no items (the peeled chunk was all masked): 10+20+30
