@@ -1,6 +1,7 @@
 """Strict numerics for every test (as Equinox does): implicit rank or dtype promotion is a bug."""
 
 import os
+import zlib
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # Tests compile in threads (the fake scenes cannot be sent to worker processes); the process
@@ -16,6 +17,16 @@ if "xla_backend_optimization_level" not in os.environ.get("XLA_FLAGS", ""):
     ).strip()
 
 import jax  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 jax.config.update("jax_numpy_rank_promotion", "raise")
 jax.config.update("jax_numpy_dtype_promotion", "strict")
+
+
+@pytest.fixture
+def rng(request):
+    # A fresh stream per test, reproducible: seeded by the test's name, plus JAXRENDER_SEED to
+    # draw other inputs on purpose (CI runs the default).
+    extra = int(os.environ.get("JAXRENDER_SEED", "0"))
+    return np.random.default_rng(zlib.crc32(request.node.name.encode()) + extra)

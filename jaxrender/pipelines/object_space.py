@@ -186,8 +186,13 @@ def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
         slot = al.page[t.chunk]
         use = t.weight > 0.0
         addr = jnp.where(use & (slot >= 0), slot * LANES + t.lane, 0)
-        vals = colour[addr] * jnp.where(use & (slot >= 0), t.weight, 0.0)[..., None]
-        image = jnp.sum(vals, axis=1).reshape(h, w, 3)
+        weight = jnp.where(use & (slot >= 0), t.weight, 0.0)
+        # Tap by tap, written out: as one sum over the tap axis XLA wrote every product
+        # [P, K, 3] (200 MB at 1080p) before adding them up (1.0 ms on an H100, 2026-11-23).
+        image = colour[addr[:, 0]] * weight[:, 0, None]
+        for k in range(1, addr.shape[1]):
+            image = image + colour[addr[:, k]] * weight[:, k, None]
+        image = image.reshape(h, w, 3)
         missing = jnp.sum(use & (slot < 0), dtype=jnp.int32)
         unowned = jnp.sum(use & (sheet.owner[t.chunk * LANES + t.lane] < 0), dtype=jnp.int32)
         overflow = al.overflow + vis.counts["overflow"] + (missing > 0).astype(jnp.int32)

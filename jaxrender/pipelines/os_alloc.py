@@ -38,9 +38,9 @@ def allocate(fp: Footprint, sheet: ShadeSheet, capacity: int, bias0: float, bias
              mode: str, aniso_taps: int) -> Allocation:
     nc = sheet.n_chunks
 
-    def count(bias):
-        return jnp.sum(mark_chunks(taps(fp, sheet, bias, mode, aniso_taps), nc),
-                       dtype=jnp.int32)
+    def mark(bias):
+        m = mark_chunks(taps(fp, sheet, bias, mode, aniso_taps), nc)
+        return m, jnp.sum(m, dtype=jnp.int32)
 
     # Past this bias every covered pixel sits at its object's coarsest level: raising it
     # further cannot reduce the work.
@@ -48,18 +48,19 @@ def allocate(fp: Footprint, sheet: ShadeSheet, capacity: int, bias0: float, bias
     max_bias = jnp.max(jnp.where(fp.covered, top - lod, 0.0), initial=0.0) + 1.0
 
     def cond(c):
-        bias, n, _ = c
+        bias, _, n, _ = c
         return (n > capacity) & (bias < max_bias)
 
     def body(c):
-        bias, _, k = c
+        bias, _, _, k = c
         bias = bias + jnp.float32(bias_step)
-        return bias, count(bias), k + 1
+        return (bias, *mark(bias), k + 1)
 
+    # The marking of the last bias tried is the one allocated: carried out of the loop, not
+    # redone (each marking is a scatter over every tap: 0.5 ms at 1080p on an H100).
     b0 = jnp.float32(bias0)
-    bias, n, steps = jax.lax.while_loop(cond, body, (b0, count(b0), jnp.int32(0)))
+    bias, marked, n, steps = jax.lax.while_loop(cond, body, (b0, *mark(b0), jnp.int32(0)))
     t = taps(fp, sheet, bias, mode, aniso_taps)
-    marked = mark_chunks(t, nc)
     rank = jnp.cumsum(marked, dtype=jnp.int32) - 1
     page = jnp.where(marked & (rank < capacity), rank, -1)
     ids, _ = compact_indices(marked, capacity, fill_value=-1)

@@ -1,10 +1,6 @@
 """Helpers for raster tests: fixed padded sizes so that one compile serves many scenes."""
 
-import os
-import zlib
-
 import numpy as np
-import pytest
 
 N_VERTS, N_FACES = 1536, 512  # every test scene is padded to these sizes
 
@@ -28,11 +24,3 @@ def gl_clip(p_cam: np.ndarray, *, fov_y_deg=90.0, aspect=1.0, near=0.1, far=100.
     x, y, z = p_cam[:, 0], p_cam[:, 1], p_cam[:, 2]
     zc = (far + near) / (near - far) * z + 2 * far * near / (near - far)
     return np.stack([f / aspect * x, f * y, zc, -z], 1).astype(np.float32)
-
-
-@pytest.fixture
-def rng(request):
-    # A fresh stream per test, reproducible: seeded by the test's name, plus JAXRENDER_SEED to
-    # draw other inputs on purpose (CI runs the default).
-    extra = int(os.environ.get("JAXRENDER_SEED", "0"))
-    return np.random.default_rng(zlib.crc32(request.node.name.encode()) + extra)
