@@ -175,15 +175,16 @@ def for_each_chunk(
         from jaxrender.raster.spans import for_each_span_chunk
 
         state = for_each_span_chunk(su, capacity, offset, state, fn)
-        return _then_loop(then, jnp.int64(0), state, jnp.sum(su.count))
+        return _then_loop(then, state, jnp.sum(su.count))
     return _for_each_bbox_chunk(su, capacity, offset, state, fn, peel, then)
 
 
-def _then_loop(then, start, state, items):
+def _then_loop(then, state, items):
+    """``then``'s steps as a loop of their own (the traversals that do not peel)."""
     if then is None:
         return state, items
     n, body = then
-    return jax.lax.fori_loop(start, n, body, (state, items))
+    return jax.lax.fori_loop(jnp.int64(0), n, body, (state, items))
 
 
 def _chunk_loop(total: Array, capacity: int, state, body, peel: bool, then):
@@ -196,7 +197,7 @@ def _chunk_loop(total: Array, capacity: int, state, body, peel: bool, then):
     n_chunks = (total + capacity - 1) // capacity
     if not peel:
         state = jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state)
-        return _then_loop(then, jnp.int64(0), state, total)
+        return _then_loop(then, state, total)
     state = body(jnp.int64(0), state)
     n_more = jnp.maximum(n_chunks, 1)
     if then is None:
