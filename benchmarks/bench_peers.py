@@ -74,7 +74,8 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
         r = time_compiled(_rasterize, clip, faces, repeats=repeats, keep_compiled=True,
                           barycentrics=bary, **static_args(faces.shape[0], width, height))
         res, compiled = r.pop("out"), r.pop("compiled")
-        vis = res if bary else vis
+        if bary:
+            vis = res
         per = []
         for _ in range(max(3, repeats // 20)):
             jax.block_until_ready(compiled(clip, faces))

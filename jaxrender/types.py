@@ -66,8 +66,16 @@ jax.tree_util.register_pytree_node(
     Counts, lambda c: ((c.values,), c.names), lambda names, leaves: Counts(names, leaves[0]))
 
 
+class _Ids:
+    """``covered`` for the buffers that carry ``tri_id`` (-1 where empty)."""
+
+    @property
+    def covered(self) -> Array:
+        return self.tri_id >= 0
+
+
 @pytree_dataclass
-class DepthBuffer:
+class DepthBuffer(_Ids):
     """Per-pixel depth and visibility without barycentrics (``raster.rasterize_depth``): what a
     depth pre-pass, a shadow map or an id buffer needs.
 
@@ -80,13 +88,9 @@ class DepthBuffer:
     depth: Array
     counts: Mapping = field(default_factory=dict)
 
-    @property
-    def covered(self) -> Array:
-        return self.tri_id >= 0
-
 
 @pytree_dataclass
-class VisBuffer:
+class VisBuffer(_Ids):
     """Per-pixel visibility: which triangle is nearest at each pixel (or sample) centre.
 
     tri_id:   int32[H, W]    triangle index into the face array, -1 where nothing is covered.
@@ -98,10 +102,10 @@ class VisBuffer:
     dbary_dx: float32[H, W, 3] analytic derivative of ``bary`` with respect to window x
                              (one pixel to the right); 0 where empty.
     dbary_dy: float32[H, W, 3] the same with respect to window y (one pixel down the image).
-    counts:   mapping (dict or ``Counts``) of int32 scalars read off the raster work lists (``fragments``: covered
-              (pixel, triangle) pairs; ``work_items``: pixel tests run; ``clipped``: triangles
-              that crossed a clip plane; ``dropped_nonfinite``: triangles dropped for a NaN or
-              infinite vertex).
+    counts:   mapping (dict or ``Counts``) of int32 scalars read off the raster work lists
+              (``fragments``: covered (pixel, triangle) pairs; ``work_items``: pixel tests
+              run; ``clipped``: triangles that crossed a clip plane; ``dropped_nonfinite``:
+              triangles dropped for a NaN or infinite vertex).
     """
 
     tri_id: Array
@@ -110,10 +114,6 @@ class VisBuffer:
     dbary_dx: Array
     dbary_dy: Array
     counts: Mapping = field(default_factory=dict)
-
-    @property
-    def covered(self) -> Array:
-        return self.tri_id >= 0
 
 
 @pytree_dataclass

@@ -138,36 +138,27 @@ def _items(su: TriSetup, slot: Array, j: Array, live: Array, offset: Array) -> W
     return WorkChunk(slot, su.tri, px, py, covered, depth)
 
 
-TRAVERSALS = ("auto", "bbox", "spans", "recompute")
+TRAVERSALS = ("bbox", "spans", "recompute")
 
 
 def for_each_chunk(
     tris: Triangles, setup: SetupFn, capacity: int, offset: Array, state,
-    fn: Callable[[object, WorkChunk], object], traversal: str = "auto", auto_cpu: str = "spans",
-    auto_default: str = "recompute", peel: bool = False, then: tuple | None = None,
+    fn: Callable[[object, WorkChunk], object], traversal: str, peel: bool = False,
+    then: tuple | None = None,
 ):
     """Run ``state = fn(state, chunk)`` over the work items of ``tris``, in chunks (dynamic
     trip count); returns (state, items: bounding-box pixels of the triangles). Every traversal
     hands ``fn`` the same covered items in the same order with the same values (the box
     traversals also hand it uncovered items, masked by ``covered``). ``traversal``: "bbox"
     (every bounding-box pixel is an item, tested by the edge functions; setup stored),
-    "recompute" (the same items, setup recomputed per item), "spans" (exact per-row spans; see
-    ``spans.py``), or "auto": ``auto_cpu`` on CPU, ``auto_default`` elsewhere (chosen when the
-    program is lowered). ``peel``: the box traversals run their first chunk outside the loop
-    and join ``then`` into it (see ``_chunk_loop``); "auto" peels on the GPU. ``then``: more
-    work after the chunks, (n: int64 scalar, body(k, (state, items)) -> (state, items)) for
-    k in [0, n); its items are added to the count. ``spans`` is imported here because it
-    builds on this module."""
+    "recompute" (the same items, setup recomputed per item) or "spans" (exact per-row spans;
+    see ``spans.py``); ``raster.rasterize.traverse`` picks one per platform. ``peel``: the box
+    traversals run their first chunk outside the loop and join ``then`` into it (see
+    ``_chunk_loop``). ``then``: more work after the chunks, (n: int64 scalar, body(k, (state,
+    items)) -> (state, items)) for k in [0, n); its items are added to the count. ``spans`` is
+    imported here because it builds on this module."""
     if traversal not in TRAVERSALS:
         raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
-    if traversal == "auto":
-        return jax.lax.platform_dependent(
-            tris, offset, state,
-            cpu=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn, auto_cpu,
-                                                  then=then),
-            default=lambda t, off, st: for_each_chunk(t, setup, capacity, off, st, fn,
-                                                      auto_default, peel=True, then=then),
-        )
     if traversal == "recompute":
         return _for_each_recompute_chunk(tris, setup, capacity, offset, state, fn, peel, then)
     su = setup(*tris.gather(), offset)

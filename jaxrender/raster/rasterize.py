@@ -147,6 +147,9 @@ def _rasterize(clip, faces, *, width, height, cull_backfaces, offsets, work_capa
         )
 
 
+TRAVERSALS = ("auto", "cpu", "gpu", "bbox", "spans", "recompute")
+
+
 def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state, fn,
              traversal="auto"):
     """Run ``state = fn(state, chunk)`` over every work chunk of every triangle, clipped or not.
@@ -154,17 +157,28 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     Triangles that need no clipping come first, in submission order; triangles crossing a
     clip plane follow, clipped in chunks of ``clip_cap``. Needs 64-bit types enabled.
     Returns (state, counts) with counts of work items (bounding-box pixels, whichever
-    traversal runs), clipped and non-finite triangles. ``traversal``: see
-    ``coverage.for_each_chunk`` (a test hook; "auto" picks per platform, and on CPU bounding
-    boxes below SPANS_MIN_PIXELS), or "gpu": what "auto" runs on a GPU, on any platform.
+    traversal runs), clipped and non-finite triangles. ``traversal``: "auto" runs "cpu" or
+    "gpu" by the platform the program is lowered for; "cpu": spans, or bounding boxes below
+    SPANS_MIN_PIXELS; "gpu": per-item setup ("recompute") where triangles are dense, else
+    bounding boxes, first chunk peeled and the clip chunks in the coverage loop; or one of
+    ``coverage.TRAVERSALS`` everywhere (test hooks).
     """
+    if traversal not in TRAVERSALS:
+        raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
+    if traversal == "auto":
+        def on(platform):
+            return lambda c, f, o, st: traverse(c, f, width, height, cull, o, capacity,
+                                                clip_cap, st, fn, platform)
+
+        return jax.lax.platform_dependent(clip, faces, offset, state, cpu=on("cpu"),
+                                          default=on("gpu"))
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
-    auto = dict(auto_cpu="bbox" if width * height < SPANS_MIN_PIXELS else "spans",
-                auto_default="recompute" if n_tris * RECOMPUTE_MIN_DENSITY >= width * height
-                else "bbox")
-    if traversal == "gpu":
-        traversal, auto = auto["auto_default"], dict(auto, peel=True)
+    peel = traversal == "gpu"
+    if traversal == "cpu":
+        traversal = "bbox" if width * height < SPANS_MIN_PIXELS else "spans"
+    elif traversal == "gpu":
+        traversal = "recompute" if n_tris * RECOMPUTE_MIN_DENSITY >= width * height else "bbox"
 
     setup = SetupFn(width, height, cull)
     with jax.named_scope("classify"):
@@ -189,15 +203,15 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
             fans = Triangles(fan.reshape(-1, 4), jnp.arange(3 * n_fan, dtype=jnp.int32)
                              .reshape(n_fan, 3), fan_ok, jnp.repeat(idx, MAX_FAN))
         with jax.named_scope("coverage"):
-            st, n = for_each_chunk(fans, setup, capacity, offset, st, fn, traversal, **auto)
+            st, n = for_each_chunk(fans, setup, capacity, offset, st, fn, traversal, peel)
         return st, items + n
 
     # The clip chunks run as the coverage loop's ``then``: on the GPU, in the same loop.
     n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
     with jax.named_scope("coverage"):
         state, items = for_each_chunk(dataclasses.replace(source, ok=inside), setup, capacity,
-                                      offset, state, fn, traversal,
-                                      then=(n_clip_chunks, clip_chunk), **auto)
+                                      offset, state, fn, traversal, peel,
+                                      then=(n_clip_chunks, clip_chunk))
     counts = {
         "work_items": items,
         "clipped": n_cross,
