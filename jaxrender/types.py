@@ -58,8 +58,9 @@ class Counts(Mapping):
         return len(self.names)
 
     def __repr__(self) -> str:
-        return f"Counts({dict(zip(self.names, self.values.T.tolist()))})" if not isinstance(
-            self.values, jax.core.Tracer) else f"Counts({self.names}, traced)"
+        if isinstance(self.values, jax.core.Tracer) or not hasattr(self.values, "tolist"):
+            return f"Counts({self.names}, {type(self.values).__name__})"
+        return f"Counts({dict(zip(self.names, self.values.T.tolist()))})"
 
 
 jax.tree_util.register_pytree_node(

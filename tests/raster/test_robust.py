@@ -179,14 +179,14 @@ def test_fragment_overflow_is_an_error_naming_the_capacity():
 
 
 def test_moving_the_camera_does_not_recompile():
-    from jaxrender.raster.rasterize import _rasterize
+    from jaxrender.raster.rasterize import _rasterize_program
 
     v, f = pad(*uv_sphere(8, 12))
-    before = _rasterize._cache_size()
+    before = _rasterize_program._cache_size()
     for k in range(3):
         cam = look_at((0.1 * k, 0.2, 3.0 + k), (0, 0, 0), fov_y_deg=40 + k, near=0.1, far=10)
         jax.block_until_ready(rasterize(v, f, cam, W, H))
-    assert _rasterize._cache_size() - before <= 1, "a camera move recompiled the rasterizer"
+    assert _rasterize_program._cache_size() - before <= 1, "a camera move recompiled the rasterizer"
 
 
 @pytest.mark.parametrize(
