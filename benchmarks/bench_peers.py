@@ -72,19 +72,20 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
     jaxrenderer's depth render has), median ms of
 
     * ``jaxrender[_depth]_ms``: single synchronised calls of the compiled program, each
-      result kept until the next call returns (``repeats`` of them; a frame of well under a
-      millisecond needs hundreds for a stable median);
+      result kept until the next call returns;
     * ``jaxrender[_depth]_loop_ms``: a frame loop through the public entry point, each frame
       donating the previous one's buffers (``donate=``), as a renderer's loop would;
     * ``jaxrender[_depth]_batched_ms``: ``draws`` calls dispatched back to back with one wait
-      (the throughput GL's loop measures)."""
-    out, vis = {}, None
+      (the throughput GL's loop measures).
+
+    The first two are timed interleaved, ``repeats`` calls each in 10 rounds: a frame of well
+    under a millisecond is host-bound, and the host's speed drifts within a run."""
+    out, steps, vis = {}, {}, None
     for suffix, bary, entry in (("", True, rasterize_clip), ("_depth", False, rasterize_depth_clip)):
-        r = time_compiled(_rasterize_program, clip, faces, repeats=repeats, keep_compiled=True,
-                          barycentrics=bary, **static_args(faces.shape[0], width, height))
-        res, compiled = r.pop("out"), r.pop("compiled")
-        if bary:
-            vis = res
+        t0 = time.perf_counter()
+        compiled = _rasterize_program.lower(clip, faces, barycentrics=bary, **static_args(
+            faces.shape[0], width, height)).compile()
+        out[f"jaxrender{suffix}_compile_s"] = time.perf_counter() - t0
         per = []
         for _ in range(max(3, repeats // 20)):
             jax.block_until_ready(compiled(clip, faces))
@@ -93,25 +94,29 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
             jax.block_until_ready(outs)
             per.append((time.perf_counter() - t0) / draws)
             del outs
-        del res
-        out.update({f"jaxrender{suffix}_ms": r["median_ms"],
-                    f"jaxrender{suffix}_loop_ms": _frame_loop(entry, clip, faces, width, height,
-                                                               repeats),
-                    f"jaxrender{suffix}_batched_ms": 1e3 * statistics.median(per),
-                    f"jaxrender{suffix}_compile_s": r["compile_s"]})
-    return out, vis
+        out[f"jaxrender{suffix}_batched_ms"] = 1e3 * statistics.median(per)
+        steps[f"jaxrender{suffix}_ms"] = lambda _, c=compiled: c(clip, faces)
+        steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, e=entry: e(
+            clip, faces, width, height, donate=prev)
+    medians, last = _interleaved(steps, repeats)
+    return out | medians, last["jaxrender_ms"]
 
 
-def _frame_loop(entry, clip, faces, width, height, repeats) -> float:
-    frame = entry(clip, faces, width, height)
-    for _ in range(3):
-        frame = jax.block_until_ready(entry(clip, faces, width, height, donate=frame))
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        frame = jax.block_until_ready(entry(clip, faces, width, height, donate=frame))
-        samples.append(time.perf_counter() - t0)
-    return 1e3 * statistics.median(samples)
+def _interleaved(steps: dict, repeats: int, rounds: int = 10):
+    """Median ms of ``state = step(state)`` per step (the state starts as None), the steps
+    taking turns in ``rounds`` rounds; returns the medians and each step's last state."""
+    state = dict.fromkeys(steps)
+    for name, step in steps.items():
+        for _ in range(3):
+            state[name] = jax.block_until_ready(step(state[name]))
+    samples = {name: [] for name in steps}
+    for _ in range(rounds):
+        for name, step in steps.items():
+            for _ in range(max(1, repeats // rounds)):
+                t0 = time.perf_counter()
+                state[name] = jax.block_until_ready(step(state[name]))
+                samples[name].append(time.perf_counter() - t0)
+    return {name: 1e3 * statistics.median(v) for name, v in samples.items()}, state
 
 
 # ------------------------------------------------------------------ jaxrenderer 0.4.0
