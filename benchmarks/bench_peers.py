@@ -17,8 +17,11 @@
   glFinish, per-draw mean; median of repeats; also the median of single synchronised draws.
   Triangle ids are compared pixel by pixel: raw agreement; agreement with depth ties excluded
   (a differing pixel where GL's triangle has, at the pixel centre, the same window depth as
-  jaxrender's within 1e-6: both answers are right); and agreement on pixels away from
-  triangle edges (the pixel and its 4 neighbours share one id in both images).
+  jaxrender's within 1e-6: both answers are right); agreement with edge ties excluded as
+  well (the centre within one snapping step, 1/256 px, of an edge of either triangle, where
+  the two rasterizers' vertex snapping decides); and agreement on pixels away from triangle
+  edges (the pixel and its 4 neighbours share one id in both images). Every difference that
+  is neither tie is printed with both triangles' depths and edge distances.
 
 The scene is the terrain of ``benchmarks/bench_raster.py`` (same mesh and camera). Every peer
 is optional: a missing package or no GL prints the reason and the rest runs.
@@ -44,6 +47,7 @@ from jaxrender.bench.raster import static_args, terrain_camera, terrain_clip
 from jaxrender.bench.timing import dump, environment, print_table, time_compiled
 from jaxrender.raster import rasterize_clip, rasterize_depth_clip
 from jaxrender.raster.rasterize import _rasterize_program
+from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.raster.test_meshes import terrain
 
 JR_CASES = [(1920, 1080, 2_500), (640, 360, 10_000)]
@@ -52,6 +56,7 @@ GL_CASES = [(1920, 1080, 2_500), (1920, 1080, 164_000), (1920, 1080, 655_000),
 TINY_JR = [(160, 90, 500)]
 TINY_GL = [(160, 90, 500), (320, 180, 10_000)]
 TIE_EPS = 1e-6
+EDGE_EPS = 1.0 / (1 << SUBPIXEL_BITS)  # px: one step of the snapping grid
 
 
 def _cases(text):
@@ -291,9 +296,11 @@ def _window(clip, width, height):
     return x, y, z, w
 
 
-def depth_at(clip, faces, tri, px, py, width, height):
+def depth_at(clip, faces, tri, px, py, width, height, with_inside=False):
     """Window depth of triangle ``tri`` at pixel centres (px + .5, py + .5), float64; NaN for a
-    triangle with a vertex behind the eye (clipped: its plane is not the drawn one)."""
+    triangle with a vertex behind the eye (clipped: its plane is not the drawn one). With
+    ``with_inside`` also whether the centre lies in the triangle (unsnapped vertices, edges
+    included) and its distance in pixels to the triangle's nearest edge."""
     x, y, z, w = _window(clip, width, height)
     f = np.asarray(faces)[tri]
     X, Y, Z, Wv = x[f], y[f], z[f], w[f]
@@ -302,11 +309,17 @@ def depth_at(clip, faces, tri, px, py, width, height):
     def edge(i, j):
         return (X[:, j] - X[:, i]) * (sy - Y[:, i]) - (Y[:, j] - Y[:, i]) * (sx - X[:, i])
 
-    area = edge(0, 1) + edge(1, 2) + edge(2, 0)
+    edges = np.stack([edge(1, 2), edge(2, 0), edge(0, 1)], -1)
+    area = np.sum(edges, -1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        lam = np.stack([edge(1, 2), edge(2, 0), edge(0, 1)], -1) / area[:, None]
+        lam = edges / area[:, None]
         d = np.sum(lam * Z, -1)
-    return np.where(np.all(Wv > 0, -1), d, np.nan)
+    d = np.where(np.all(Wv > 0, -1), d, np.nan)
+    if not with_inside:
+        return d
+    lengths = np.stack([np.hypot(X[:, j] - X[:, i], Y[:, j] - Y[:, i])
+                        for i, j in ((1, 2), (2, 0), (0, 1))], -1)
+    return d, np.all(lam >= 0, -1), np.min(np.abs(edges) / lengths, -1)
 
 
 def _interior(ids):
@@ -319,25 +332,45 @@ def _interior(ids):
 
 
 def compare_ids(ours, theirs, our_depth, clip, faces, width, height) -> dict:
+    """Pixel-by-pixel agreement of triangle ids. Two kinds of difference are ties, where both
+    answers are right: a depth tie (GL's triangle has, at the pixel centre, the same window
+    depth as ours within TIE_EPS) and an edge tie (the centre lies within one snapping step,
+    EDGE_EPS px, of an edge of either triangle: the fill decision then rests on how each
+    rasterizer snaps the vertices, and GL's hardware does that its own way). Every difference
+    that is neither is printed."""
     ours, theirs = np.asarray(ours), np.asarray(theirs)
     same = ours == theirs
     diff_y, diff_x = np.nonzero(~same)
     both = (ours[diff_y, diff_x] >= 0) & (theirs[diff_y, diff_x] >= 0)
-    ties = 0
+    ties = edge_ties = 0
     if both.any():
         py, px = diff_y[both], diff_x[both]
         d_theirs = depth_at(clip, faces, theirs[py, px], px, py, width, height)
         d_ours = np.asarray(our_depth, np.float64)[py, px]
-        ties = int(np.sum(np.abs(d_theirs - d_ours) <= TIE_EPS))
+        tie = np.abs(d_theirs - d_ours) <= TIE_EPS
+        ties = int(np.sum(tie))
+        py, px, d_ours, d_theirs = py[~tie], px[~tie], d_ours[~tie], d_theirs[~tie]
+        t_ours, t_gl = ours[py, px], theirs[py, px]
+        _, in_o, e_o = depth_at(clip, faces, t_ours, px, py, width, height, True)
+        _, in_g, e_g = depth_at(clip, faces, t_gl, px, py, width, height, True)
+        edge = np.minimum(e_o, e_g) <= EDGE_EPS
+        edge_ties = int(np.sum(edge))
+        for i in range(len(px)):
+            print(f"  pixel ({px[i]}, {py[i]}){' (edge tie)' if edge[i] else ''}: ours {t_ours[i]}"
+                  f" at depth {d_ours[i]:.9f} (centre inside: {bool(in_o[i])}, {e_o[i]:.2e} px "
+                  f"from an edge), GL {t_gl[i]} at {d_theirs[i]:.9f} (inside: {bool(in_g[i])}, "
+                  f"{e_g[i]:.2e} px from an edge)", flush=True)
     interior = _interior(ours) & _interior(theirs)
     n = ours.size
     return {
         "ids_agree": float(np.mean(same)),
         "ids_agree_excl_ties": float(np.sum(same) / max(n - ties, 1)),
+        "ids_agree_excl_all_ties": float(np.sum(same) / max(n - ties - edge_ties, 1)),
         "ids_agree_interior": float(np.mean(same[interior])) if interior.any() else float("nan"),
         "interior_fraction": float(np.mean(interior)),
         "differing_pixels": int(n - np.sum(same)),
         "depth_ties": ties,
+        "edge_ties": edge_ties,
         "coverage_only_diffs": int(np.sum(~both)),
     }
 
@@ -437,8 +470,8 @@ def main(argv=None) -> int:
     print("\n## triangle-id agreement with OpenGL\n")
     print_table([r for r in rows if "ids_agree" in r],
                 ["resolution", "triangles", "ids_agree", "ids_agree_excl_ties",
-                 "ids_agree_interior", "interior_fraction", "differing_pixels", "depth_ties",
-                 "coverage_only_diffs"])
+                 "ids_agree_excl_all_ties", "ids_agree_interior", "interior_fraction",
+                 "differing_pixels", "depth_ties", "edge_ties", "coverage_only_diffs"])
     if skipped:
         print(f"\nskipped: {skipped}")
     dump(a.json, payload)
