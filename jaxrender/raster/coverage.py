@@ -74,13 +74,6 @@ def running_max(x: Array) -> Array:
     )
 
 
-# Up to this many slots ``owners`` finds each item's slot by binary search (the slots' ends,
-# at most 512 KB, stay in cache; one fused kernel); above it by marking each slot's first item
-# and a running maximum over the chunk (a scatter and a scan of the whole chunk: on an H100 at
-# 640x360 with 10k triangles 7 kernels, 18 of the frame's 56 us of kernels, 2026-11-23).
-SEARCH_MAX_SLOTS = 1 << 16
-
-
 def owners(count: Array, incl: Array, base: Array, capacity: int):
     """Expand runs of ``count[s]`` items per slot s (``incl`` = inclusive cumsum of count) and
     return, for the items [base, base + capacity): the owning slot (int32), the item's index
@@ -88,43 +81,23 @@ def owners(count: Array, incl: Array, base: Array, capacity: int):
     n_slots = count.shape[0]
     count = count.astype(incl.dtype)
     starts = incl - count
-    if n_slots <= SEARCH_MAX_SLOTS:
-        slot = _owners_by_search(incl, base + jnp.arange(capacity, dtype=incl.dtype))
-    else:
-        slot = _owners_by_marks(count, incl, starts - base, base, capacity)
-    slot = jnp.minimum(slot, n_slots - 1)
-    # Index inside the run; fits int32 (a run has < 2^31 items).
-    local32 = jnp.clip(starts - base, -(2**31) + 1, 2**31 - 1).astype(jnp.int32)
-    j = jnp.arange(capacity, dtype=jnp.int32) - local32[slot]
-    live = base + jnp.arange(capacity, dtype=jnp.int64) < incl[-1]
-    return slot, j, live
-
-
-def _owners_by_search(incl: Array, item: Array) -> Array:
-    """searchsorted(incl, item, side="right") as a fixed number of bisection steps, unrolled
-    here so that XLA fuses them into one kernel (jnp.searchsorted's own loops are not fused:
-    6-7 kernels, 2026-11-23)."""
-    n = incl.shape[0]
-    lo = jnp.zeros(item.shape, jnp.int32)
-    hi = jnp.full(item.shape, n, jnp.int32)
-    for _ in range(n.bit_length()):  # enough halvings to take hi - lo from n to 0
-        mid = (lo + hi) // 2
-        right = (lo < hi) & (incl[jnp.minimum(mid, n - 1)] <= item)
-        lo, hi = jnp.where(right, mid + 1, lo), jnp.where(right | (lo >= hi), hi, mid)
-    return lo
-
-
-def _owners_by_marks(count, incl, local, base, capacity):
-    """The same slots: mark each slot's first item, then a running maximum."""
-    n_slots = count.shape[0]
+    # Which slot owns each item: mark each slot's first item, then a running maximum.
+    local = starts - base
     in_chunk = (count > 0) & (local >= 0) & (local < capacity)
     mark = jnp.full((capacity,), -1, jnp.int32)
     mark = mark.at[jnp.where(in_chunk, local, capacity)].max(
         jnp.arange(n_slots, dtype=jnp.int32), mode="drop"
     )
-    # The slot owning item `base`: searchsorted(incl, base, side="right"), as one reduction.
+    # The triangle owning item `base`: searchsorted(incl, base, side="right"), as one reduction
+    # (jnp.searchsorted's default is a loop of ~20 tiny kernels on a GPU).
     first = jnp.sum(incl <= base, dtype=jnp.int32)
-    return running_max(mark.at[0].max(first))
+    mark = mark.at[0].max(first)
+    slot = jnp.minimum(running_max(mark), n_slots - 1)
+    # Index inside the run; fits int32 (a run has < 2^31 items).
+    local32 = jnp.clip(local, -(2**31) + 1, 2**31 - 1).astype(jnp.int32)
+    j = jnp.arange(capacity, dtype=jnp.int32) - local32[slot]
+    live = base + jnp.arange(capacity, dtype=jnp.int64) < incl[-1]
+    return slot, j, live
 
 
 def window_depth(e: list, z: list, inv_area: Array) -> Array:
