@@ -85,7 +85,7 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
 
     The first two are timed interleaved, ``repeats`` calls each in 10 rounds: a frame of well
     under a millisecond is host-bound, and the host's speed drifts within a run."""
-    out, steps, vis = {}, {}, None
+    out, steps = {}, {}
     for suffix, bary, entry in (("", True, rasterize_clip), ("_depth", False, rasterize_depth_clip)):
         t0 = time.perf_counter()
         compiled = _rasterize_program.lower(clip, faces, barycentrics=bary, **static_args(
@@ -336,8 +336,8 @@ def compare_ids(ours, theirs, our_depth, clip, faces, width, height) -> dict:
     answers are right: a depth tie (GL's triangle has, at the pixel centre, the same window
     depth as ours within TIE_EPS) and an edge tie (the centre lies within one snapping step,
     EDGE_EPS px, of an edge of either triangle: the fill decision then rests on how each
-    rasterizer snaps the vertices, and GL's hardware does that its own way). Every difference
-    that is neither is printed."""
+    rasterizer snaps the vertices, and GL's hardware does that its own way). Differences that
+    are neither are printed (up to 20), and the first three edge ties."""
     ours, theirs = np.asarray(ours), np.asarray(theirs)
     same = ours == theirs
     diff_y, diff_x = np.nonzero(~same)
@@ -353,9 +353,12 @@ def compare_ids(ours, theirs, our_depth, clip, faces, width, height) -> dict:
         t_ours, t_gl = ours[py, px], theirs[py, px]
         _, in_o, e_o = depth_at(clip, faces, t_ours, px, py, width, height, True)
         _, in_g, e_g = depth_at(clip, faces, t_gl, px, py, width, height, True)
-        edge = np.minimum(e_o, e_g) <= EDGE_EPS
+        # A triangle with a vertex behind the eye has no drawn plane here (NaN depth): never
+        # a tie.
+        edge = (np.minimum(e_o, e_g) <= EDGE_EPS) & np.isfinite(d_theirs)
         edge_ties = int(np.sum(edge))
-        for i in range(len(px)):
+        shown = np.concatenate([np.nonzero(~edge)[0][:20], np.nonzero(edge)[0][:3]])
+        for i in shown:  # every real difference (up to 20), and a few edge ties as evidence
             print(f"  pixel ({px[i]}, {py[i]}){' (edge tie)' if edge[i] else ''}: ours {t_ours[i]}"
                   f" at depth {d_ours[i]:.9f} (centre inside: {bool(in_o[i])}, {e_o[i]:.2e} px "
                   f"from an edge), GL {t_gl[i]} at {d_theirs[i]:.9f} (inside: {bool(in_g[i])}, "

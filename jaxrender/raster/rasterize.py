@@ -96,37 +96,46 @@ def _rasterize_checked(clip, faces, width, height, barycentrics, cull_backfaces=
                        sample_offsets=None, work_capacity=None, clip_capacity=None, donate=None):
     # Per call only what the arrays can change; the rest is worked out once per setting, so a
     # frame loop's Python stays small beside a sub-millisecond frame.
+    width, height = _check_size(width, height)
+    offsets = _fixed_offsets(None if sample_offsets is None else
+                             tuple(tuple(float(v) for v in o) for o in sample_offsets))
     _check_mesh(clip, faces, "clip", 4)
-    if sample_offsets is not None:
-        sample_offsets = tuple(tuple(o) for o in sample_offsets)
-    static = _static_args(width, height, bool(cull_backfaces), sample_offsets, work_capacity,
-                          clip_capacity, faces.shape[0], barycentrics)
+    n_tris = faces.shape[0]
+    static = dict(
+        width=width,
+        height=height,
+        cull_backfaces=bool(cull_backfaces),
+        offsets=offsets,
+        work_capacity=int(work_capacity or _default_work_capacity(n_tris, width, height)),
+        clip_capacity=int(clip_capacity or default_clip_capacity(n_tris)),
+        barycentrics=barycentrics,
+    )
     args = (_as_dtype(clip, jnp.float32), _as_dtype(faces, jnp.int32))
-    if any(isinstance(x, jax.core.Tracer) for x in args):
+    if not _outside_any_trace():  # inside the caller's jit, scan, vmap...: one program
         if donate is not None:
             raise ValueError("rasterize: donate is for a call made on its own; inside jax.jit "
                              "XLA places the buffers itself")
         return _rasterize(*args, **static)
     if donate is None:
         return _rasterize_program(*args, **static)
-    _check_donated(donate, barycentrics, len(static["offsets"]), width, height)
+    _check_donated(donate, barycentrics, len(offsets), width, height)
     return _rasterize_donating(*args, donate, **static)
 
 
-@lru_cache(maxsize=256)
-def _static_args(width, height, cull_backfaces, sample_offsets, work_capacity, clip_capacity,
-                 n_tris, barycentrics) -> dict:
-    width, height = _check_size(width, height)
-    offsets = sample_patterns.validate(sample_offsets or sample_patterns.CENTER)
-    return dict(
-        width=width,
-        height=height,
-        cull_backfaces=cull_backfaces,
-        offsets=sample_patterns.to_fixed(offsets, SUBPIXEL_BITS),
-        work_capacity=int(work_capacity or default_work_capacity(n_tris, width, height)),
-        clip_capacity=int(clip_capacity or default_clip_capacity(n_tris)),
-        barycentrics=barycentrics,
-    )
+_default_work_capacity = lru_cache(maxsize=64)(default_work_capacity)
+
+
+@lru_cache(maxsize=64)
+def _fixed_offsets(sample_offsets) -> tuple[tuple[int, int], ...]:
+    return sample_patterns.to_fixed(
+        sample_patterns.validate(sample_offsets or sample_patterns.CENTER), SUBPIXEL_BITS)
+
+
+try:  # jax has no public test for "not tracing"; without this one every call stays nested
+    from jax._src.core import trace_state_clean as _outside_any_trace
+except ImportError:  # pragma: no cover
+    def _outside_any_trace() -> bool:
+        return False
 
 
 def _as_dtype(x, dtype):
@@ -194,12 +203,21 @@ def _rasterize_donating(clip, faces, donate, **static):
 def _check_donated(donate, barycentrics: bool, n_samples: int, width: int, height: int):
     kind = VisBuffer if barycentrics else DepthBuffer
     shape = (height, width) if n_samples == 1 else (n_samples, height, width)
-    if type(donate) is not kind or np.shape(donate.tri_id) != shape:
+    if type(donate) is not kind or np.shape(donate.tri_id) != shape or not isinstance(
+            donate.counts, Counts):
         got = type(donate).__name__
         if hasattr(donate, "tri_id"):
             got += f" of shape {np.shape(donate.tri_id)}"
+            got += f" with counts of type {type(getattr(donate, 'counts', None)).__name__}"
         raise ValueError(f"rasterize: donate must be a {kind.__name__} of shape {shape} (the "
                          f"previous result of the same call), got {got}")
+    leaves = jax.tree_util.tree_leaves(donate)
+    if any(leaf.is_deleted() for leaf in leaves if isinstance(leaf, jax.Array)):
+        raise ValueError("rasterize: donate was given a result whose buffers are already gone "
+                         "(donated before); pass the latest frame's result")
+    if len({id(leaf) for leaf in leaves}) != len(leaves):
+        raise ValueError("rasterize: donate was given a result whose fields share an array; "
+                         "each field needs its own buffer")
 
 
 TRAVERSALS = ("auto", "cpu", "gpu", "bbox", "spans", "recompute")

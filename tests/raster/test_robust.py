@@ -179,14 +179,33 @@ def test_fragment_overflow_is_an_error_naming_the_capacity():
 
 
 def test_moving_the_camera_does_not_recompile():
-    from jaxrender.raster.rasterize import _rasterize_program
+    from jaxrender.raster.rasterize import _rasterize, _rasterize_program
+
+    def compiled():
+        return _rasterize._cache_size() + _rasterize_program._cache_size()
 
     v, f = pad(*uv_sphere(8, 12))
-    before = _rasterize_program._cache_size()
+    jax.block_until_ready(rasterize(v, f, look_at((0, 0.2, 3.0), (0, 0, 0), fov_y_deg=40,
+                                                  near=0.1, far=10), W, H))
+    before = compiled()
     for k in range(3):
         cam = look_at((0.1 * k, 0.2, 3.0 + k), (0, 0, 0), fov_y_deg=40 + k, near=0.1, far=10)
         jax.block_until_ready(rasterize(v, f, cam, W, H))
-    assert _rasterize_program._cache_size() - before <= 1, "a camera move recompiled the rasterizer"
+    assert compiled() == before, "a camera move recompiled the rasterizer"
+
+
+def test_index_check_is_remembered_per_array_not_per_shape():
+    """The faces' index range is remembered per device array; another array of the same shape
+    with a bad index must still be refused."""
+    v, f = pad(*uv_sphere(8, 12))
+    clip = np.concatenate([v, np.ones((len(v), 1), np.float32)], 1)
+    good = jnp.asarray(f)
+    rasterize_clip(clip, good, W, H)
+    bad = good.at[3, 1].set(len(v))
+    for _ in range(2):
+        with pytest.raises(ValueError, match=f"face index {len(v)} out of range"):
+            rasterize_clip(clip, bad, W, H)
+    rasterize_clip(clip, good, W, H)
 
 
 @pytest.mark.parametrize(
