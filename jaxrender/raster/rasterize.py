@@ -111,7 +111,7 @@ def _rasterize_checked(clip, faces, width, height, barycentrics, cull_backfaces=
         barycentrics=barycentrics,
     )
     args = (_as_dtype(clip, jnp.float32), _as_dtype(faces, jnp.int32))
-    if not _outside_any_trace():  # inside the caller's jit, scan, vmap...: one program
+    if _tracing(args):  # inside the caller's jit, scan, vmap...: part of its program
         if donate is not None:
             raise ValueError("rasterize: donate is for a call made on its own; inside jax.jit "
                              "XLA places the buffers itself")
@@ -131,11 +131,17 @@ def _fixed_offsets(sample_offsets) -> tuple[tuple[int, int], ...]:
         sample_patterns.validate(sample_offsets or sample_patterns.CENTER), SUBPIXEL_BITS)
 
 
-try:  # jax has no public test for "not tracing"; without this one every call stays nested
-    from jax._src.core import trace_state_clean as _outside_any_trace
-except ImportError:  # pragma: no cover
-    def _outside_any_trace() -> bool:
-        return False
+try:  # jax has no public test for "no trace is active"
+    from jax._src.core import trace_state_clean as _no_trace_active
+except ImportError:  # pragma: no cover - then only traced arguments are seen
+    def _no_trace_active() -> bool:
+        return True
+
+
+def _tracing(args) -> bool:
+    """Whether this call is being traced into a caller's program: arrays closed over by a jit
+    or scan body are concrete, so the arguments alone do not tell."""
+    return any(isinstance(x, jax.core.Tracer) for x in args) or not _no_trace_active()
 
 
 def _as_dtype(x, dtype):
