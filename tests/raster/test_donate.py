@@ -71,9 +71,14 @@ def test_entry_points_nest_in_the_callers_programs(rng):
     """Device arrays closed over by a jit or scan body are not tracers, yet the call must
     join the caller's program (a top-level-only compiled entry may not be nested)."""
     clip, faces = (jnp.asarray(a) for a in _random_scene(rng, "mixed_sizes"))
-    want = np.asarray(rasterize_depth_clip(clip, faces, W, H).depth)
-    got = jax.jit(lambda s: rasterize_depth_clip(clip, faces, W, H).depth * s)(2.0)
-    np.testing.assert_array_equal(np.asarray(got), 2 * want, err_msg="inside jax.jit")
-    _, stacked = jax.lax.scan(lambda c, _: (c, rasterize_clip(clip, faces, W, H).depth),
+    want = rasterize_depth_clip(clip, faces, W, H)
+    # The outputs are compared as they leave the program: arithmetic fused onto them may
+    # round differently (XLA GPU moved a product into the depth fusion: 1 ulp, 2026-11-23).
+    got = jax.jit(lambda: rasterize_depth_clip(clip, faces, W, H))()
+    for name in ("tri_id", "depth"):
+        np.testing.assert_array_equal(np.asarray(getattr(got, name)),
+                                      np.asarray(getattr(want, name)), err_msg=f"jit: {name}")
+    _, stacked = jax.lax.scan(lambda c, _: (c, rasterize_clip(clip, faces, W, H).tri_id),
                               0, None, length=2)
-    np.testing.assert_array_equal(np.asarray(stacked)[1], want, err_msg="inside lax.scan")
+    np.testing.assert_array_equal(np.asarray(stacked)[1], np.asarray(want.tri_id),
+                                  err_msg="inside lax.scan")
