@@ -87,13 +87,13 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
     * ``jaxrender[_depth]_batched_ms``: ``draws`` calls dispatched back to back with one wait
       (the throughput GL's loop measures).
 
-    The first two are timed interleaved, ``repeats`` calls each in 10 rounds: a frame of well
-    under a millisecond is host-bound, and the host's speed drifts within a run."""
+    All but the last are timed interleaved, ``repeats`` calls each in 10 rounds: a frame of
+    well under a millisecond is host-bound, and the host's speed drifts within a run."""
     out, steps = {}, {}
+    static = static_args(faces.shape[0], width, height)
     for suffix, bary, entry in (("", True, rasterize_clip), ("_depth", False, rasterize_depth_clip)):
         t0 = time.perf_counter()
-        compiled = _rasterize_program.lower(clip, faces, barycentrics=bary, **static_args(
-            faces.shape[0], width, height)).compile()
+        compiled = _rasterize_program.lower(clip, faces, barycentrics=bary, **static).compile()
         out[f"jaxrender{suffix}_compile_s"] = time.perf_counter() - t0
         per = []
         for _ in range(max(3, repeats // 20)):
@@ -107,8 +107,7 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
         first = compiled(clip, faces)
         steps[f"jaxrender{suffix}_ms"] = lambda _, c=compiled: c(clip, faces)
         steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, b=bary, f=first: _rasterize_donating(
-            clip, faces, f if prev is None else prev, barycentrics=b,
-            **static_args(faces.shape[0], width, height))
+            clip, faces, f if prev is None else prev, barycentrics=b, **static)
         steps[f"jaxrender{suffix}_public_loop_ms"] = lambda prev, e=entry: e(
             clip, faces, width, height, donate=prev)
     medians, last = _interleaved(steps, repeats)

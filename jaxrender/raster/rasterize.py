@@ -347,14 +347,13 @@ def _check_size(width, height) -> tuple[int, int]:
 
 def _check_mesh(verts, faces, what: str, dim: int) -> None:
     """Checks that need only shapes and dtypes; values are checked when they are concrete."""
+    n_verts = np.shape(verts)[0] if np.ndim(verts) else 0
     _check_shapes(np.shape(verts), _dtype(verts), np.shape(faces), _dtype(faces), what, dim)
     if not isinstance(faces, jax.core.Tracer):
         lo, hi = _index_range(faces)
-        if lo < 0 or hi >= np.shape(verts)[0]:
+        if lo < 0 or hi >= n_verts:
             bad = lo if lo < 0 else hi
-            raise ValueError(
-                f"rasterize: face index {bad} out of range for {np.shape(verts)[0]} vertices"
-            )
+            raise ValueError(f"rasterize: face index {bad} out of range for {n_verts} vertices")
 
 
 def _dtype(x) -> np.dtype:
