@@ -134,7 +134,7 @@ def cmd_render(a) -> int:
     camera = backend.default_camera(scene)
     pipe = backend.pipeline(a.pipeline)
     cfg = backend.make_config(a.pipeline, w, h, params)
-    comp = timing.compile_render(pipe.render, scene, camera, cfg)
+    comp = timing.compile_program(pipe, scene, camera, cfg)
     frame, ms, _ = timing.time_call(comp.call, scene, camera, repeats=a.repeats, warmup=1)
     import numpy as np
 

@@ -53,7 +53,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
     """Yield one row per (scene, pipeline); rows past ``deadline`` (time.monotonic) are skipped."""
     from jaxrender.pipelines import get_pipeline, make_config
     from jaxrender.scene import default_camera, load_scene
-    from jaxrender.study.timing import compile_render
+    from jaxrender.study.timing import compile_program
 
     for scene_spec in scene_specs:
         base = dict(scene=scene_spec, resolution=f"{width}x{height}")
@@ -79,7 +79,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
                 pname, pparams = parse_spec(pipe_spec)
                 pipe = get_pipeline(pname)
                 cfg = make_config(pname, width=width, height=height, **pparams)
-                comp = compile_render(pipe.render, scene, camera, cfg)
+                comp = compile_program(pipe, scene, camera, cfg)
                 r = time_first_call(lambda c=comp, s=scene, k=camera: c.call(s, k), repeats)
                 frame = r.pop("out")
                 if comp.method == "aot":

@@ -1,17 +1,21 @@
-"""Shading pipelines. Each module registers one ``render(scene, camera, cfg) -> Frame``."""
+"""Shading pipelines. Each module registers one pipeline (a ``step``, or a stateless
+``frame``) with the registry; ``program`` compiles and runs them all alike."""
 
 from jaxrender.pipelines.registry import (  # noqa: F401
     REGISTRY,
+    Pipeline,
     RenderConfig,
     get_pipeline,
     list_pipelines,
     make_config,
     register,
+    register_frame,
 )
 
 from jaxrender.pipelines.base import COUNT_KEYS, PipelineConfig  # noqa: E402,F401
+from jaxrender.pipelines.program import PipelineOverflow  # noqa: E402,F401
 
-# Pipeline modules are imported here as they land, so that registration happens on import.
+# Importing a pipeline module registers it.
 from jaxrender.pipelines import reference  # noqa: E402,F401
 from jaxrender.pipelines import forward  # noqa: E402,F401
 from jaxrender.pipelines import deferred  # noqa: E402,F401

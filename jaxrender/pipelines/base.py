@@ -1,16 +1,15 @@
-"""What every pipeline shares: the config base, the jitted entry, exact (alpha-tested)
-visibility, surface points from a triangle id at any pixel, shading of a visibility buffer over
-a compacted work list, and the standard counts of a Frame.
+"""What every pipeline shares: the config base, exact (alpha-tested) visibility, surface
+points from a triangle id at any pixel, shading of a visibility buffer over a compacted work
+list, and the standard counts of a Frame.
 
-A pipeline is ``render(scene, camera, cfg) -> Frame`` registered with
-``registry.register(name, ConfigCls)``; wrap it with ``@pipeline_entry`` so it is jitted with a
-static config and a traced camera, and raises eagerly when a capacity overflowed.
+A pipeline registers its ``step`` (or a stateless ``frame``) with the registry
+(``registry.register`` / ``register_frame``); ``pipelines.program`` compiles and runs it.
 """
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
+from typing import ClassVar
 
 import jax
 import jax.numpy as jnp
@@ -51,6 +50,8 @@ class PipelineConfig(RenderConfig):
     cull_backfaces: bool = False
     fragment_capacity: int = 0
 
+    OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ("chunk", "fragment_capacity")
+
     def __post_init__(self):
         if int(self.chunk) < 0:
             raise ValueError(f"chunk must be >= 0 (0: automatic), got {self.chunk}")
@@ -61,27 +62,9 @@ class PipelineConfig(RenderConfig):
     def capacity(self) -> int:
         return int(self.fragment_capacity or 4 * self.width * self.height)
 
-
-def pipeline_entry(fn):
-    """Jit ``fn(scene, camera, cfg)`` with ``cfg`` static. Called eagerly, a Frame whose
-    ``overflow`` count is non-zero raises OverflowError (principle 5); under an outer jit the
-    count is in the Frame and the image is NaN."""
-    jitted = jax.jit(fn, static_argnums=2)
-
-    @functools.wraps(fn)
-    def render(scene: Scene, camera: Camera, cfg) -> Frame:
-        frame = jitted(scene, camera, cfg)
-        over = frame.counts.get("overflow")
-        if over is not None and not isinstance(over, jax.core.Tracer) and int(over) > 0:
-            raise OverflowError(
-                f"{fn.__module__}: {int(over)} overflow(s) (fragments past fragment_capacity="
-                f"{getattr(cfg, 'capacity', '?')}, or visibility ids that do not fit their "
-                f"bit fields); see the Frame counts"
-            )
-        return frame
-
-    render.jitted = jitted
-    return render
+    def overflow_hint(self) -> str:
+        return (f"fragments past fragment_capacity={self.capacity}, or visibility ids that do "
+                f"not fit their bit fields; raise fragment_capacity (see the Frame counts)")
 
 
 def make_counts(**values) -> dict:
@@ -295,7 +278,7 @@ def dispatch_points(active: Array, points_of, fn, out: Array, chunk: int):
 
 __all__ = [
     "COUNT_KEYS", "PipelineConfig", "clip_vertices", "dispatch", "dispatch_points",
-    "is_alpha_tested", "make_counts", "pipeline_entry", "pixel_barycentrics", "points_at",
+    "is_alpha_tested", "make_counts", "pixel_barycentrics", "points_at",
     "points_at_xy", "points_from_vis", "poison_on_overflow", "raster_fragments",
     "raster_visbuffer", "shade_vis_pixels", "visibility",
 ]

@@ -11,14 +11,15 @@ reconstructed and is shaded as well (counted).
 
 Reconstruction of a missing pixel, geometry-aware from a full-resolution visibility pass:
 
-- temporal (``render_sequence``, frames t >= 1): the pixel is reprojected into frame t-1
+- temporal (``temporal = true``, frames t >= 1 of a sequence): the pixel is reprojected into frame t-1
   through the known camera motion (``metrics.reproject``) and the nearest pixel of the previous
   output is taken, unless it is off screen, its depth disagrees (disocclusion) or its surface id
   differs; then
 - spatial: the mean of the 4 neighbours (all shaded this frame) that show the same surface id;
   when none does, the neighbour nearest in depth.
 
-The single-frame ``render`` (the registered entry) is the spatial-only first frame.
+State: the previous frame's History. ``render`` (one frame from an empty history) is the
+spatial-only first frame; ``render_sequence`` and studies run the technique as shipped.
 Counts: ``shade_invocations`` (pixels shaded), ``reconstruction_reads`` (neighbour colours
 read + history colours read), split into ``spatial_reads`` and ``history_reads``;
 ``history_rejected``, ``orphans_shaded``.
@@ -31,13 +32,11 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from jaxrender.metrics.temporal import DEFAULT_DEPTH_TOLERANCE, reproject
 from jaxrender.pipelines.base import (
     PipelineConfig,
     make_counts,
-    pipeline_entry,
     points_from_vis,
     poison_on_overflow,
     visibility,
@@ -52,7 +51,7 @@ from jaxrender.pipelines.pixel_ids import (
     shift,
     surface_ids,
 )
-from jaxrender.pipelines.registry import register
+from jaxrender.pipelines.registry import REGISTRY, register
 from jaxrender.scene.camera import Camera
 from jaxrender.shading import shade
 from jaxrender.types import Array, Frame
@@ -64,8 +63,9 @@ NEIGHBOURS = ((0, -1), (0, 1), (-1, 0), (1, 0))  # (dy, dx): left, right, up, do
 @dataclass(frozen=True)
 class CheckerboardConfig(PipelineConfig):
     """pattern: ``checker`` (pixel checker) or ``2x1`` (half-width, 2 samples per pixel).
-    frame: frame-index offset of the checker (the parity of ``render``'s single frame).
-    temporal: reuse the reprojected previous frame in ``render_sequence``.
+    frame: frame-index offset of the checker (frame t shades parity frame + t).
+    temporal: reuse the reprojected previous frame (frames after the first of a sequence);
+    false: the spatial-only variant.
     ids: surface id used for reconstruction and rejection (triangle, object, material, none).
     lod_bias: texture LOD bias (-1: one MIP level sharper). depth_tolerance: relative linear
     depth difference at which history is rejected. wave_size: lanes per wave (counts only)."""
@@ -193,47 +193,15 @@ def empty_history(camera, cfg) -> History:
                    jnp.ones((h, w), jnp.float32), camera, jnp.asarray(False))
 
 
-@register("checkerboard", CheckerboardConfig)
-@pipeline_entry
-def render(scene, camera, cfg: CheckerboardConfig) -> Frame:
-    """Checkerboard: half the pixels per frame, geometry-aware spatial reconstruction."""
-    frame, _ = checker_frame(scene, camera, jnp.int32(0), empty_history(camera, cfg), cfg)
-    return frame
+def init(scene, static, camera, cfg: CheckerboardConfig) -> History:
+    return empty_history(camera, cfg)
 
 
-def _stack_cameras(cameras) -> Camera:
-    if hasattr(cameras, "cameras"):  # a CameraPath
-        return cameras.cameras
-    if isinstance(cameras, (list, tuple)):
-        cams = [c[0] if isinstance(c, tuple) else c for c in cameras]
-        return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *cams)
-    return cameras
+@register("checkerboard", CheckerboardConfig, init=init)
+def step(scene, static, history: History, camera, t, cfg: CheckerboardConfig):
+    """Checkerboard: half the pixels per frame, alternating; reprojected history, spatial fill."""
+    return checker_frame(scene, camera, t, history, cfg)
 
 
-def _sequence(scene, cameras: Camera, cfg: CheckerboardConfig) -> Frame:
-    n = int(np.shape(cameras.eye)[0])
-    first = jax.tree_util.tree_map(lambda a: a[0], cameras)
-
-    def step(hist, xs):
-        cam, t = xs
-        frame, hist = checker_frame(scene, cam, t, hist, cfg)
-        return hist, frame
-
-    _, frames = jax.lax.scan(step, empty_history(first, cfg),
-                             (cameras, jnp.arange(n, dtype=jnp.int32)))
-    return frames
-
-
-_sequence_jit = jax.jit(_sequence, static_argnums=2)
-
-
-def render_sequence(scene, cameras, cfg: CheckerboardConfig) -> Frame:
-    """Render a camera path (CameraPath, batched Camera with a leading T axis, or a list) with
-    the checker alternating every frame and, with ``cfg.temporal``, temporal reconstruction
-    from the previous frame. Returns a Frame with image (T, H, W, 3), counts (T,) and aux
-    (T, H, W); one compile per (scene shape, T, config)."""
-    frames = _sequence_jit(scene, _stack_cameras(cameras), cfg)
-    over = frames.counts["overflow"]
-    if not isinstance(over, jax.core.Tracer) and int(jnp.max(over)) > 0:
-        raise OverflowError(f"checkerboard: fragments exceeded fragment_capacity ({cfg.capacity})")
-    return frames
+render = REGISTRY["checkerboard"].render
+render_sequence = REGISTRY["checkerboard"].render_sequence

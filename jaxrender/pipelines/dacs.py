@@ -19,15 +19,14 @@ its parents inside (``border="average"``, the default: 1/16 of a 4k x 4k flat im
 shaded) or is always shaded (``border="shade"``: exact for a ramp at any size). Every pixel
 beyond level 0 has a parent inside, so no size, odd or 1 pixel wide, gives a NaN.
 
-The threshold is traced: ``render_threshold(scene, camera, threshold, cfg)`` sweeps it without
-recompiling; the registered ``render`` calls it with ``cfg.threshold``.
+The threshold is a traced config field (``TRACED_FIELDS``): a threshold sweep compiles once.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
 import jax
 import jax.numpy as jnp
@@ -45,7 +44,7 @@ from jaxrender.pipelines.dacs_levels import SPACINGS, level_map, level_pixels, p
 from jaxrender.pipelines.deferred import pack_gbuffer, unpack_gbuffer
 from jaxrender.pipelines.dispatch import compact, dispatch
 from jaxrender.pipelines.pixel_ids import ID_KINDS, LUMAS, SPACES, check_choice, luma, surface_ids
-from jaxrender.pipelines.registry import register
+from jaxrender.pipelines.registry import register_frame
 from jaxrender.shading import shade
 from jaxrender.types import Array, Frame
 
@@ -71,6 +70,8 @@ class DacsConfig(PipelineConfig):
     warp_width: int = 32
     warp_batches: int = 4
     border: str = "average"
+
+    TRACED_FIELDS: ClassVar[tuple[str, ...]] = ("threshold",)
 
     def __post_init__(self):
         super().__post_init__()
@@ -189,7 +190,9 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     return img.reshape(h, w, 3), shaded.reshape(h, w), level, counts
 
 
-def _render(scene, camera, threshold, cfg: DacsConfig) -> Frame:
+@register_frame("dacs", DacsConfig)
+def render(scene, camera, cfg: DacsConfig) -> Frame:
+    """DACS: five (seven) levels per block, shade where parents differ, else interpolate."""
     with jax.named_scope("visibility"):
         vis = visibility(scene, camera, cfg)
         covered = vis.tri_id >= 0
@@ -205,7 +208,7 @@ def _render(scene, camera, threshold, cfg: DacsConfig) -> Frame:
 
     with jax.named_scope("dacs"):
         image, shaded, level, c = dacs_reconstruct(
-            shade_fn, ids, covered, threshold, spacing=cfg.spacing, luma_kind=cfg.luma,
+            shade_fn, ids, covered, cfg.threshold, spacing=cfg.spacing, luma_kind=cfg.luma,
             space=cfg.variance_space, chunk=cfg.chunk, warp_width=cfg.warp_width,
             warp_batches=cfg.warp_batches, border=cfg.border)
     image = poison_on_overflow(image, vis.counts["overflow"])
@@ -216,26 +219,3 @@ def _render(scene, camera, threshold, cfg: DacsConfig) -> Frame:
                          alpha_invocations=vis.counts["alpha_invocations"],
                          overflow=vis.counts["overflow"], **c)
     return Frame(image, counts, {"level": level, "shaded": shaded})
-
-
-_render_jit = jax.jit(_render, static_argnums=3)
-
-
-def render_threshold(scene, camera, threshold, cfg: DacsConfig) -> Frame:
-    """DACS with a traced ``threshold`` (cfg.threshold ignored): a sweep compiles once."""
-    cfg = dataclasses.replace(cfg, threshold=0.0)
-    frame = _render_jit(scene, camera, jnp.asarray(threshold, jnp.float32), cfg)
-    over = frame.counts["overflow"]
-    if not isinstance(over, jax.core.Tracer) and int(over) > 0:
-        raise OverflowError(f"dacs: {int(over)} fragments exceeded fragment_capacity "
-                            f"({cfg.capacity})")
-    return frame
-
-
-@register("dacs", DacsConfig)
-def render(scene, camera, cfg: DacsConfig) -> Frame:
-    """DACS: five (seven) levels per block, shade where parents differ, else interpolate."""
-    return render_threshold(scene, camera, cfg.threshold, cfg)
-
-
-render.jitted = jax.jit(render, static_argnums=2)

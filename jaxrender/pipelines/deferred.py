@@ -17,8 +17,8 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.pipelines.base import (PipelineConfig, dispatch_points, make_counts,
-                                      pipeline_entry, poison_on_overflow, visibility)
-from jaxrender.pipelines.registry import register
+                                      poison_on_overflow, visibility)
+from jaxrender.pipelines.registry import register_frame
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.shading import shade, surface_points
 from jaxrender.shading.vec import safe_normalize
@@ -72,8 +72,7 @@ def unpack_gbuffer(rows, camera, live) -> SurfacePoints:
                          **fields)
 
 
-@register("deferred", DeferredConfig)
-@pipeline_entry
+@register_frame("deferred", DeferredConfig)
 def render(scene, camera, cfg: DeferredConfig) -> Frame:
     """Deferred shading: G-buffer pass, then one shade per covered pixel (bytes counted)."""
     w, h = cfg.width, cfg.height

@@ -19,13 +19,13 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.pipelines.base import (PipelineConfig, clip_vertices, dispatch_points,
-                                      is_alpha_tested, make_counts, pipeline_entry, points_at,
+                                      is_alpha_tested, make_counts, points_at,
                                       points_at_xy, poison_on_overflow,
                                       raster_fragments)
 from jaxrender.pipelines.dispatch import dispatch_lanes
 from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of_segment_index,
                                        quad_list, segment_starts)
-from jaxrender.pipelines.registry import register
+from jaxrender.pipelines.registry import register_frame
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.shading import alpha_test, shade
 from jaxrender.sorting import lex_sort
@@ -55,8 +55,7 @@ class ForwardConfig(PipelineConfig):
             raise ValueError(f"wave_size must be 32 or 64, got {self.wave_size}")
 
 
-@register("forward", ForwardConfig)
-@pipeline_entry
+@register_frame("forward", ForwardConfig)
 def render(scene, camera, cfg: ForwardConfig) -> Frame:
     """Forward shading in submission order (overdraw, 2x2 quads, optional Z pre-pass, MSAA)."""
     w, h = cfg.width, cfg.height

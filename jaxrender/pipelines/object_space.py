@@ -7,11 +7,11 @@ Oxide Games' Nitrous engine (GDC 2016; Baker and Jarzynski 2022).
   -> owned shadels of the allocated chunks shaded through the chunked dispatch
   -> final pass: every covered pixel samples the store (bilinear / trilinear / anisotropic).
 
-``render(scene, camera, cfg)`` renders one frame from an empty store. ``render_sequence(scene,
-cameras, cfg)`` runs a ``lax.scan`` over a batched camera carrying the store: shading happens
-every ``shade_every``-th frame (the frames between reuse the store and only shade chunks that
-became visible), and with ``reuse`` a chunk resident in the previous frame is copied instead of
-shaded when its inputs did not change (no view-dependent effect, or the eye did not move).
+Static: the sheet (``prepare``). State: the store. ``render`` renders one frame from an empty
+store; in a sequence (``render_sequence``, studies) the store is carried: shading happens every
+``shade_every``-th frame (the frames between reuse the store and only shade chunks that became
+visible), and with ``reuse`` a chunk resident in the previous frame is copied instead of shaded
+when its inputs did not change (no view-dependent effect, or the eye did not move).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from jaxrender.pipelines.dispatch import shade_pixels
 from jaxrender.pipelines.os_alloc import allocate
 from jaxrender.pipelines.os_marking import footprint, mark_chunks, mark_shadels, taps
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
-from jaxrender.pipelines.registry import register
+from jaxrender.pipelines.registry import REGISTRY, register
 from jaxrender.shading import shade, surface_points
 from jaxrender.types import Array, Frame, pytree_dataclass
 
@@ -44,7 +44,7 @@ class ObjectSpaceConfig(PipelineConfig):
     level-0 shadels per side for every object (0 = per object from texel_density in shadels per
     world unit and the materials' texture/stripe resolution, capped at max_sheet_resolution).
     xatlas_resolution, force_xatlas: chart generation. shade_every, reuse: temporal decoupling
-    in render_sequence. wave_size: lanes per wave for the wave counts (a chunk is 64 lanes).
+    in sequences. wave_size: lanes per wave for the wave counts (a chunk is 64 lanes).
     """
 
     store_shadels: int = 0
@@ -76,6 +76,11 @@ class ObjectSpaceConfig(PipelineConfig):
         for k, ok in checks.items():
             if not ok:
                 raise ValueError(f"object_space: invalid {k} = {getattr(self, k)!r}")
+
+    def overflow_hint(self) -> str:
+        return (f"the marked chunks do not fit the store even at the largest MIP bias (or "
+                f"fragments overflowed); raise store_shadels (now {self.store_chunks * LANES})"
+                f" or fragment_capacity (now {self.capacity})")
 
     @property
     def store_chunks(self) -> int:
@@ -266,81 +271,21 @@ def _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing, u
     return counts, aux
 
 
-# ---------------------------------------------------------------- entry points
+# ---------------------------------------------------------------- the registered pipeline
 
 
-def _one(scene, sheet, camera, cfg):
-    frame, _ = frame_step(scene, sheet, camera, cfg, empty_state(sheet, cfg), jnp.bool_(True))
-    return frame
+def init(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig) -> StoreState:
+    return empty_state(sheet, cfg)
 
 
-_one_jit = jax.jit(_one, static_argnums=3)
-
-
-def _raise_on_overflow(frame: Frame, cfg) -> Frame:
-    over = frame.counts["overflow"]
-    if not isinstance(over, jax.core.Tracer) and int(jnp.max(over)) > 0:
-        raise OverflowError(
-            f"object_space: the marked chunks do not fit the store even at the largest MIP "
-            f"bias (or fragments overflowed); raise store_shadels (now {cfg.store_chunks * LANES})")
-    return frame
-
-
-@register("object_space", ObjectSpaceConfig)
-def render(scene, camera, cfg: ObjectSpaceConfig) -> Frame:
+@register("object_space", ObjectSpaceConfig, init=init, prepare=prepare)
+def step(scene, sheet: ShadeSheet, state: StoreState, camera, t, cfg: ObjectSpaceConfig):
     """Object-space shading: visible 8x8 shadel chunks shaded in texture space, then sampled."""
-    sheet = prepare(scene, cfg)
-    return _raise_on_overflow(_one_jit(scene, sheet, camera, cfg), cfg)
+    return frame_step(scene, sheet, camera, cfg, state, t % cfg.shade_every == 0)
 
 
-def compile_aot(scene, camera, cfg: ObjectSpaceConfig):
-    """Ahead of time: this scene's sheet (host) and the compiled frame program. Returns
-    ``call(scene, camera) -> Frame`` for this same scene (and cameras of this shape)."""
-    sheet = prepare(scene, cfg)
-    compiled = _one_jit.lower(scene, sheet, camera, cfg).compile()
-    return lambda s, c: _raise_on_overflow(compiled(s, sheet, c), cfg)
-
-
-render.compile_aot = compile_aot
-
-
-def compile_aot_parts(scene, camera, cfg: ObjectSpaceConfig):
-    """``compile_aot`` in picklable halves, for compiling in another process (the study's
-    compile pool): ``(jitted, args, sheet)``, where ``jitted.lower(*args).compile()`` is
-    compile_aot's program and ``aot_call(compiled, sheet, cfg)`` rebuilds its call."""
-    sheet = prepare(scene, cfg)
-    return _one_jit, (scene, sheet, camera, cfg), sheet
-
-
-def aot_call(compiled, sheet, cfg: ObjectSpaceConfig):
-    """compile_aot's ``call(scene, camera) -> Frame`` from the compiled (or deserialized)
-    program of ``compile_aot_parts`` and its sheet."""
-    return lambda s, c: _raise_on_overflow(compiled(s, sheet, c), cfg)
-
-
-render.compile_aot_parts = compile_aot_parts
-render.aot_call = aot_call
-
-
-def _sequence(scene, sheet, cameras, cfg):
-    def step(carry, cam):
-        state, t = carry
-        frame, state = frame_step(scene, sheet, cam, cfg, state, t % cfg.shade_every == 0)
-        return (state, t + 1), frame
-
-    _, frames = jax.lax.scan(step, (empty_state(sheet, cfg), jnp.int32(0)), cameras)
-    return frames
-
-
-_sequence_jit = jax.jit(_sequence, static_argnums=3)
-
-
-def render_sequence(scene, cameras, cfg: ObjectSpaceConfig) -> Frame:
-    """Frames for a batched camera (leading axis T, e.g. ``camera_path.pan(...).cameras``),
-    carrying the store between frames (temporal decoupling). Image (T, H, W, 3); counts (T,)."""
-    sheet = prepare(scene, cfg)
-    return _raise_on_overflow(_sequence_jit(scene, sheet, cameras, cfg), cfg)
-
+render = REGISTRY["object_space"].render
+render_sequence = REGISTRY["object_space"].render_sequence
 
 __all__ = ["ObjectSpaceConfig", "StoreState", "empty_state", "frame_step", "prepare", "render",
-           "render_sequence", "shadel_barycentrics", "shadel_points"]
+           "render_sequence", "shadel_barycentrics", "shadel_points", "step"]

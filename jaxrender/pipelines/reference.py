@@ -22,13 +22,13 @@ beside its best pipeline (DESIGN: the reference should be converged >= 10 dB abo
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import partial
+from typing import ClassVar
 
 import jax
 import jax.numpy as jnp
 
 from jaxrender.pipelines.dispatch import shade_pixels
-from jaxrender.pipelines.registry import RenderConfig, register
+from jaxrender.pipelines.registry import RenderConfig, register_frame
 from jaxrender.raster.coverage import EMPTY_KEY, depth_key
 from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
 from jaxrender.raster.resolve import barycentrics_at, resolve
@@ -56,6 +56,9 @@ class ReferenceConfig(RenderConfig):
     k: int = DEFAULT_K
     chunk: int = 0
     convergence: bool = False
+
+    TRACED_FIELDS: ClassVar[tuple[str, ...]] = ("k",)
+    OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ("chunk",)
 
     def __post_init__(self):
         if int(self.k) < 1:
@@ -166,7 +169,7 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
     return Frame(image=image, counts=counts, aux={"coverage": any_cov.reshape(h, w)})
 
 
-def _ldr_psnr(a: Array, b: Array) -> Array:
+def ldr_psnr(a: Array, b: Array) -> Array:
     """PSNR in dB of the display-referred (clamped, sRGB-encoded) images, data range 1;
     over the trailing (H, W, 3) axes. +inf for identical images."""
     from jaxrender.metrics.display import to_display
@@ -176,48 +179,22 @@ def _ldr_psnr(a: Array, b: Array) -> Array:
     return 10.0 * jnp.log10(1.0 / mse)
 
 
-def _program_cfg(cfg: ReferenceConfig) -> ReferenceConfig:
-    """The static part of cfg the compiled program depends on (k and convergence are not)."""
-    return replace(cfg, k=1, convergence=False)
-
-
-@partial(jax.jit, static_argnums=3)
-def _render_jit(scene, camera, k, cfg):
-    return _render(scene, camera, k, cfg)
-
-
-@partial(jax.jit, static_argnums=3)
-def _render_path_jit(scene, cameras, k, cfg):
-    return jax.lax.map(lambda cam: _render(scene, cam, k, cfg), cameras)
-
-
-def _with_convergence(fn, scene, camera, cfg: ReferenceConfig) -> Frame:
-    base = _program_cfg(cfg)
-    frame = fn(scene, camera, jnp.int32(cfg.k), base)
-    if cfg.convergence:
-        fine = fn(scene, camera, jnp.int32(2 * cfg.k), base)
-        conv = _ldr_psnr(frame.image, fine.image)
-        frame = replace(frame, counts=dict(frame.counts, convergence_psnr=conv))
-    return frame
-
-
-@register("reference", ReferenceConfig,
-          "ground truth: k x k stratified samples per pixel, each shaded, box filter")
+@register_frame("reference", ReferenceConfig,
+                "ground truth: k x k stratified samples per pixel, each shaded, box filter")
 def render(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> Frame:
     """Ground truth: k x k stratified samples per pixel, each shaded, box filter.
 
-    One compiled program per (scene shapes, width, height, chunk): k is passed to it traced,
-    so changing k or moving the camera never recompiles. With ``cfg.convergence`` the frame
-    is rendered again at 2k and ``counts['convergence_psnr']`` holds their LDR PSNR.
+    k is a traced config field, so changing k or moving the camera never recompiles. With
+    ``cfg.convergence`` the frame is rendered again at 2k and ``counts['convergence_psnr']``
+    holds their LDR PSNR.
     """
-    return _with_convergence(_render_jit, scene, camera, cfg)
-
-
-def render_path(scene: Scene, cameras: Camera, cfg: ReferenceConfig) -> Frame:
-    """The reference of every frame of a camera path: ``cameras`` carries a leading frame axis
-    T (``CameraPath.cameras``); returns a Frame with image (T, H, W, 3) and counts (T,).
-    Frames are rendered one after another (``lax.map``), so memory does not grow with T."""
-    return _with_convergence(_render_path_jit, scene, cameras, cfg)
+    k = jnp.asarray(cfg.k, jnp.int32)
+    frame = _render(scene, camera, k, cfg)
+    if cfg.convergence:
+        fine = _render(scene, camera, 2 * k, cfg)
+        frame = replace(frame, counts=dict(frame.counts,
+                                           convergence_psnr=ldr_psnr(frame.image, fine.image)))
+    return frame
 
 
 def convergence_psnr(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> float:

@@ -1,15 +1,32 @@
-"""The pipeline registry: one ``render(scene, camera, cfg) -> Frame`` per ``type`` string.
+"""The pipeline registry: one protocol for every pipeline, one ``type`` string per pipeline.
 
-Every pipeline module registers itself with ``@register("name", ConfigClass)``. A config class
-is a frozen (hashable, hence static under jit) dataclass deriving from ``RenderConfig``; the
-study runner builds it from TOML with ``make_config``, which rejects unknown keys by name.
+A pipeline is three functions over its static config (DESIGN.md, "The data flow"):
+
+- ``prepare(scene, cfg) -> Static``: host-side work done once per scene (object-space shade
+  sheets); default: nothing (None);
+- ``init(scene, static, camera, cfg) -> State``: what a sequence carries from frame to frame
+  (history, a store); default: nothing (an empty tuple);
+- ``step(scene, static, state, camera, t, cfg) -> (Frame, State)``: frame ``t`` (traced int32).
+
+``@register("name", ConfigClass, init=..., prepare=...)`` registers a ``step``;
+``@register_frame("name", ConfigClass)`` registers a stateless ``frame(scene, camera, cfg)``.
+From these the registry's ``Pipeline`` builds ``render(scene, camera, cfg) -> Frame`` (one step
+from ``init``) and ``render_sequence(scene, cameras, cfg) -> Frame`` (a ``lax.scan`` of
+``step``), both through ``pipelines.program``: one jit site and one overflow check for all.
+
+A config class is a frozen (hashable, hence static under jit) dataclass deriving from
+``RenderConfig``; the study builds it from TOML with ``make_config``, which rejects unknown keys
+by name. Fields named in the class attribute ``TRACED_FIELDS`` are passed to the compiled
+program as arrays instead (a DACS threshold sweep compiles once); fields in
+``OUTPUT_NEUTRAL`` change how the work is laid out but never a pixel or a count of the result
+(chunk sizes, capacities), which tests check.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Callable, NamedTuple
+from typing import Callable, ClassVar
 
 
 @dataclass(frozen=True)
@@ -19,27 +36,101 @@ class RenderConfig:
     width: int = 320
     height: int = 180
 
+    TRACED_FIELDS: ClassVar[tuple[str, ...]] = ()
+    OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ()
 
-class Pipeline(NamedTuple):
+    def overflow_hint(self) -> str:
+        """What to raise when a frame of this config overflows (part of the error message)."""
+        return "a capacity of the pipeline was exceeded; see the Frame counts"
+
+
+def no_prepare(scene, cfg):
+    return None
+
+
+def no_state(scene, static, camera, cfg):
+    return ()
+
+
+@dataclass(frozen=True)
+class Pipeline:
+    """A registered pipeline. Hashable: it is a static argument of the compiled programs."""
+
     name: str
     config_cls: type
-    render: Callable  # render(scene, camera, cfg) -> Frame
-    description: str
+    step: Callable  # step(scene, static, state, camera, t, cfg) -> (Frame, State)
+    init: Callable = no_state
+    prepare: Callable = no_prepare
+    description: str = ""
+
+    @property
+    def stateful(self) -> bool:
+        return self.init is not no_state
+
+    def render(self, scene, camera, cfg):
+        """One frame from ``init`` (frame index 0): a Frame with image (H, W, 3)."""
+        from jaxrender.pipelines import program
+
+        return program.render(self, scene, camera, cfg)
+
+    def render_sequence(self, scene, cameras, cfg, *, warmup_frames: int = 0):
+        """Frames of a camera path (CameraPath, a Camera batched over a leading axis T, or a
+        list of cameras), the state carried from frame to frame; the first ``warmup_frames``
+        are rendered and dropped. A Frame with image (T', H, W, 3), counts (T',)."""
+        from jaxrender.pipelines import program
+
+        return program.render_sequence(self, scene, cameras, cfg, warmup_frames=warmup_frames)
 
 
 REGISTRY: dict[str, Pipeline] = {}
 
 
-def register(name: str, config_cls: type, description: str = ""):
+def _check_config_cls(name: str, config_cls: type) -> None:
     if not (dataclasses.is_dataclass(config_cls) and issubclass(config_cls, RenderConfig)):
         raise TypeError(f"pipeline {name!r}: config must be a RenderConfig dataclass")
+    fields = {f.name for f in dataclasses.fields(config_cls)}
+    for attr in ("TRACED_FIELDS", "OUTPUT_NEUTRAL"):
+        unknown = sorted(set(getattr(config_cls, attr)) - fields)
+        if unknown:
+            raise TypeError(f"pipeline {name!r}: {attr} names {unknown[0]!r}, not a field")
 
-    def wrap(render: Callable) -> Callable:
-        if name in REGISTRY:
+
+def register(name: str, config_cls: type, description: str = "", *,
+             init: Callable = no_state, prepare: Callable = no_prepare, replace: bool = False):
+    """Register ``step(scene, static, state, camera, t, cfg) -> (Frame, State)`` under
+    ``name``; returns ``step`` unchanged. ``replace=True`` lets a test swap an entry."""
+    _check_config_cls(name, config_cls)
+
+    def wrap(step: Callable) -> Callable:
+        if name in REGISTRY and not replace:
             raise ValueError(f"pipeline {name!r} is registered twice")
-        doc = description or (render.__doc__ or "").strip().splitlines()[0]
-        REGISTRY[name] = Pipeline(name, config_cls, render, doc)
-        return render
+        doc = description or ((step.__doc__ or "").strip().splitlines() or [""])[0]
+        REGISTRY[name] = Pipeline(name, config_cls, step, init, prepare, doc)
+        return step
+
+    return wrap
+
+
+@dataclass(frozen=True)
+class FrameStep:
+    """The step of a stateless pipeline: ``frame(scene, camera, cfg)``, state passed through.
+    A frozen dataclass (hashable, equal by its function) so that it is a stable static."""
+
+    frame: Callable
+
+    def __call__(self, scene, static, state, camera, t, cfg):
+        return self.frame(scene, camera, cfg), state
+
+
+def register_frame(name: str, config_cls: type, description: str = "", *,
+                   replace: bool = False):
+    """Register a stateless pipeline's ``frame(scene, camera, cfg) -> Frame``. Returns the
+    registered pipeline's ``render`` (the compiled, overflow-checked entry)."""
+
+    def wrap(frame: Callable) -> Callable:
+        doc = description or ((frame.__doc__ or "").strip().splitlines() or [""])[0]
+        register(name, config_cls, doc, replace=replace)(FrameStep(frame))
+        return REGISTRY[name].render
 
     return wrap
 

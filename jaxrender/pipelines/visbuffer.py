@@ -19,9 +19,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.pipelines.base import (PipelineConfig, clip_vertices, dispatch, make_counts,
-                                      pipeline_entry, points_at, poison_on_overflow, visibility)
+                                      points_at, poison_on_overflow, visibility)
 from jaxrender.pipelines.quads import BIG, first_of_segment_index, segment_starts
-from jaxrender.pipelines.registry import register
+from jaxrender.pipelines.registry import register_frame
 from jaxrender.scene.camera import world_to_clip
 from jaxrender.shading import shade
 from jaxrender.sorting import lex_sort
@@ -201,8 +201,7 @@ def pixel_rates(scene, camera, cfg, tri) -> jax.Array:
     return triangle_rates(scene, camera, cfg)[jnp.maximum(tri, 0)]
 
 
-@register("visbuffer", VisBufferConfig)
-@pipeline_entry
+@register_frame("visbuffer", VisBufferConfig)
 def render(scene, camera, cfg: VisBufferConfig) -> Frame:
     """Visibility buffer: packed 32-bit ids, shading from the id in material tiles/waves, VRS."""
     w, h = cfg.width, cfg.height

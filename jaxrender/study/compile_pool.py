@@ -1,17 +1,16 @@
 """Compile study programs in spawned worker processes, so that tracing and lowering (Python,
 under the GIL) run in parallel and not only XLA's compile.
 
-Each job names a scene (``load_scene(source, params)``, or carries it loaded), a camera path (the first camera of
-``make_cameras(scene, path, width, height)``), a render function and its config. The worker
-loads the scene itself (cached per worker), lowers and compiles the program exactly as
-``timing.compile_render`` does in-process, and returns the executable serialized with
-``jax.experimental.serialize_executable``; the parent deserializes it onto its first device and
-wraps it in a ``timing.Compiled`` whose compile_ms is the worker's lower+compile time.
-
-A pipeline with host-side preparation (``render.compile_aot``) takes part only when it also
-provides ``render.compile_aot_parts(scene, camera, cfg) -> (jitted, args, extra)`` and
-``render.aot_call(compiled, extra, cfg) -> call``: the worker compiles ``jitted.lower(*args)``
-and sends ``extra`` (object_space's sheet) back pickled beside the executable.
+Each job names a scene (``load_scene(source, params)``, or carries it loaded), a camera path
+(``make_cameras(scene, path, width, height)``), a registered Pipeline and its config, and
+whether it is the single-frame program (first camera) or the sequence program (the whole path,
+with ``warmup_frames`` dropped). The worker loads the scene itself (cached per worker), lowers
+and compiles the program exactly as ``timing.compile_program`` does in-process
+(``pipelines.program.lower``), and returns the executable serialized with
+``jax.experimental.serialize_executable`` beside the program's ``Prepared`` arguments
+(object-space's sheet, traced config values); the parent deserializes it onto its first device
+and binds it (``program.bind``) into a ``timing.Compiled`` whose compile_ms is the worker's
+lower+compile time.
 
 Every job that cannot go through a worker (unpicklable pieces, a worker error, an executable
 that does not serialize, a broken pool) is compiled by the caller's ``fallback`` in a thread
@@ -67,10 +66,12 @@ class Job:
     make_cameras: Callable  # backend.make_cameras
     source: str
     scene_params: tuple  # items of the scene's parameters
-    path: Any  # schema.PathSpec
+    path: Any  # schema.PathSpec (its frames include the warm-up frames)
     resolution: tuple  # (width, height)
-    render: Callable  # the pipeline's render function
+    pipeline: Any  # the registered Pipeline
     cfg: Any  # its config
+    sequence: bool = False  # the sequence program over the path, else the single frame
+    warmup_frames: int = 0
     scene: Any = None  # the loaded scene, when the parent has it: a worker then loads nothing
     # (the room's shadow map alone was a rasterizer compile per worker, 2026-11-23)
 
@@ -94,7 +95,7 @@ def _init_worker(config_values: dict) -> None:
             pass
 
 
-def _camera(job: Job):
+def _cameras(job: Job):
     skey = (job.load_scene, job.source, job.scene_params)
     scene = _SCENES.get(skey)
     if scene is None and job.scene is not None:
@@ -102,38 +103,28 @@ def _camera(job: Job):
     if scene is None:
         scene = _SCENES[skey] = job.load_scene(job.source, dict(job.scene_params))
     ckey = skey + (job.make_cameras, job.path, tuple(job.resolution))
-    cam = _CAMERAS.get(ckey)
-    if cam is None:
-        cam = _CAMERAS[ckey] = job.make_cameras(scene, job.path, *job.resolution)[0]
-    return scene, cam
+    cams = _CAMERAS.get(ckey)
+    if cams is None:
+        cams = _CAMERAS[ckey] = job.make_cameras(scene, job.path, *job.resolution)
+    return scene, (cams if job.sequence else cams[0])
 
 
 def compile_job(payload: bytes) -> bytes:
-    """Worker: the pickled Job -> pickled ("aot", compile_ms, executable, in_tree, out_tree,
-    extra) or ("first_call",) when the program cannot be lowered as a whole (as
-    ``timing.compile_render`` decides). The job and the result travel as bytes so that a
-    (un)pickling error is this job's error, never the pool's."""
-    import jax
+    """Worker: the pickled Job -> pickled (compile_ms, executable, in_tree, out_tree,
+    prepared). The job and the result travel as bytes so that a (un)pickling error is this
+    job's error, never the pool's."""
     from jax.experimental.serialize_executable import serialize
+
+    from jaxrender.pipelines import program
 
     job: Job = pickle.loads(payload)
     started, t_start = time.time(), time.perf_counter()
-    scene, cam = _camera(job)
-    parts = getattr(job.render, "compile_aot_parts", None)
+    scene, cams = _cameras(job)
     t0 = time.perf_counter()
-    try:
-        if parts is not None:
-            jitted, args, extra = parts(scene, cam, job.cfg)
-            lowered = jitted.lower(*args)
-        else:
-            extra = None
-            lowered = jax.jit(job.render, static_argnums=2).lower(scene, cam, job.cfg)
-        t_lowered = time.perf_counter()
-        compiled = lowered.compile()
-    except Exception:
-        if parts is not None:  # a pipeline with host preparation: the pool's fallback decides
-            raise
-        return pickle.dumps(("first_call",))
+    lowered, prepared = program.lower(job.pipeline, scene, cams, job.cfg, sequence=job.sequence,
+                                      warmup_frames=job.warmup_frames)
+    t_lowered = time.perf_counter()
+    compiled = lowered.compile()
     t_end = time.perf_counter()
     ms = (t_end - t0) * 1e3
     exe, in_tree, out_tree = serialize(compiled)
@@ -141,41 +132,28 @@ def compile_job(payload: bytes) -> bytes:
         import sys
 
         print(f"TIMELINE pid={os.getpid()} {job.source} {type(job.cfg).__name__} "
-              f"start={started:.2f} scene_s={t0 - t_start:.2f} lower_s={t_lowered - t0:.2f} "
-              f"compile_s={t_end - t_lowered:.2f} end={started + t_end - t_start:.2f}",
-              file=sys.stderr, flush=True)
-    return pickle.dumps(("aot", ms, exe, in_tree, out_tree, extra))
+              f"sequence={job.sequence} start={started:.2f} scene_s={t0 - t_start:.2f} "
+              f"lower_s={t_lowered - t0:.2f} compile_s={t_end - t_lowered:.2f} "
+              f"end={started + t_end - t_start:.2f}", file=sys.stderr, flush=True)
+    return pickle.dumps((ms, exe, in_tree, out_tree, prepared))
 
 
 # ------------------------------------------------------------------ parent side
 
 
-def processable(render) -> bool:
-    """Can a worker compile this pipeline's program as compile_render would?"""
-    if hasattr(render, "compile_aot"):
-        return hasattr(render, "compile_aot_parts") and hasattr(render, "aot_call")
-    return True
-
-
-def load(result: bytes, render, cfg):
+def load(result: bytes, job: Job):
     """The parent's ``timing.Compiled`` from a worker's result."""
     import jax
     from jax.experimental.serialize_executable import deserialize_and_load
 
+    from jaxrender.pipelines import program
     from jaxrender.study import timing
 
-    res = pickle.loads(result)
-    if res[0] == "first_call":
-        return timing.Compiled(lambda s, c: render(s, c, cfg), float("nan"), "first_call")
-    _, ms, exe, in_tree, out_tree, extra = res
+    ms, exe, in_tree, out_tree, prepared = pickle.loads(result)
     dev = jax.devices()[0]
     compiled = deserialize_and_load(exe, in_tree, out_tree, backend=dev.client,
                                     execution_devices=[dev])
-    if hasattr(render, "compile_aot_parts"):
-        call = render.aot_call(compiled, extra, cfg)
-    else:
-        call = lambda s, c: compiled(s, c)  # noqa: E731
-    return timing.Compiled(call, float(ms), "aot")
+    return timing.Compiled(program.bind(job.pipeline, job.cfg, compiled, prepared), float(ms))
 
 
 class ProcessCompiler:
@@ -222,10 +200,6 @@ class ProcessCompiler:
 
     def submit(self, label: str, job: Job, fallback: Callable[[], Any]) -> Future:
         out: Future = Future()
-        if not processable(job.render):
-            self.threads.submit(self._fallback, label, "its pipeline has compile_aot but no "
-                                "compile_aot_parts / aot_call", fallback, out)
-            return out
         try:
             with main_hidden():  # workers are spawned as jobs are submitted
                 payload = pickle.dumps(job)
@@ -249,7 +223,7 @@ class ProcessCompiler:
 
     def _finish(self, label, job, pf, fallback, out: Future) -> None:
         try:
-            res = load(pf.result(), job.render, job.cfg)
+            res = load(pf.result(), job)
         except Exception as e:
             if self._closing:
                 out.cancel()

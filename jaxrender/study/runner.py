@@ -8,16 +8,20 @@ resolved config), ``environment.json`` (device, jax version, code version), ``su
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
 import re
 import time
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
+from jaxrender.pipelines.program import PipelineOverflow
+from jaxrender.pipelines.registry import no_prepare
 from jaxrender.study import backend, cache, schema, store, timing
 from jaxrender.study.schema import Study
 
@@ -81,9 +85,10 @@ def reference_frames(scene, spec, cams, ref, resolution, programs: dict | None =
 
 
 def compile_reference(scene, cam, ref, resolution) -> timing.Compiled:
+    """The reference's single-frame program: references are rendered and cached per frame."""
     pipe = backend.pipeline(ref.pipeline)
     cfg = backend.make_config(ref.pipeline, *resolution, dict(ref.params))
-    return timing.compile_render(pipe.render, scene, cam, cfg)
+    return timing.compile_program(pipe, scene, cam, cfg)
 
 
 def hardest_crop(error: np.ndarray, size: int) -> tuple[int, int, int, int]:
@@ -121,7 +126,7 @@ def _seq(study: Study, spec, path, variant) -> str:
         [spec.source, spec.params, spec.file_hash], [path.name, path.type, path.frames,
                                                      path.params],
         [variant.label, variant.type, variant.params_json], study.resolution,
-        [ref.pipeline, ref.params], sorted(study.metrics),
+        [ref.pipeline, ref.params], sorted(study.metrics), study.warmup_frames,
     )
 
 
@@ -131,24 +136,33 @@ def _seq(study: Study, spec, path, variant) -> str:
 COMPILE_WORKERS = max(1, min(8, os.cpu_count() or 1))
 
 
-def compile_variant(study: Study, scene, camera, variant) -> timing.Compiled:
+def rendered_path(study: Study, path):
+    """The path as rendered: its frames plus the study's warm-up frames before them."""
+    return dataclasses.replace(path, frames=path.frames + study.warmup_frames)
+
+
+def compile_variant(study: Study, scene, cameras, variant, *, sequence: bool) -> timing.Compiled:
+    """The variant's sequence program over ``cameras`` (the rendered path, warm-up included)
+    or, with ``sequence=False``, its single-frame program (``cameras`` one camera)."""
     w, h = study.resolution
     pipe = backend.pipeline(variant.type)
     cfg = backend.make_config(variant.type, w, h, dict(variant.params))
-    return timing.compile_render(pipe.render, scene, camera, cfg)
+    return timing.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
+                                  warmup_frames=study.warmup_frames if sequence else 0)
 
 
-def program_key(spec, variant) -> tuple:
-    """One compiled program per scene and variant: the points of a sweep share a label, so the
-    key holds their parameters too."""
-    return spec.label, variant.label, variant.params_json
+def program_key(spec, variant, frames: int = 0) -> tuple:
+    """One compiled program per scene, variant and sequence length (0: the single-frame
+    program): the points of a sweep share a label, so the key holds their parameters too."""
+    return spec.label, variant.label, variant.params_json, frames
 
 
 def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
-    """Compile every (scene, variant) program of ``todo``, and the reference program of each
-    scene whose references are not all cached, side by side while this thread renders the
-    references into the cache. A scene's camera paths share one program (same shapes). Returns
-    {program_key(spec, variant): Compiled}; nothing is timed until every compile is done.
+    """Compile every program of ``todo`` (per scene and variant the sequence program of each
+    path length and the single-frame program), and the reference program of each scene whose
+    references are not all cached, side by side while this thread renders the references into
+    the cache. ``cams[scene label, path name]`` are the rendered path's cameras (warm-up
+    included). Returns {program_key: Compiled}; nothing is timed until every compile is done.
 
     With more than two workers (or ``JAXRENDER_COMPILE_PROCESSES=1``) the programs compile in
     spawned worker processes (``compile_pool``): tracing and lowering hold the GIL, so threads
@@ -163,8 +177,9 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
              if compile_pool.use_processes(COMPILE_WORKERS) else None)
     futures, programs = {}, {}
     pairs = {(s.label, p.name): (s, p) for s, p, _ in todo}
+    warm = study.warmup_frames
 
-    def submit(label, spec, path, pipe, params, fn, *args):
+    def submit(label, spec, path, pipe, params, sequence, fn, *args):
         """fn(*args) in a thread, or its program (pipeline ``pipe`` with ``params``) in a
         worker process with fn(*args) as the fallback."""
         if procs is None:
@@ -172,10 +187,11 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
         try:
             job = compile_pool.Job(
                 backend.load_scene, backend.make_cameras, spec.source,
-                tuple(dict(spec.params).items()), path, tuple(study.resolution),
-                backend.pipeline(pipe).render,
+                tuple(dict(spec.params).items()), rendered_path(study, path),
+                tuple(study.resolution), backend.pipeline(pipe),
                 backend.make_config(pipe, *study.resolution, dict(params)),
-                scenes[spec.label])
+                sequence=sequence, warmup_frames=warm if sequence else 0,
+                scene=scenes[spec.label])
         except Exception:  # fn raises it again, where the thread path would
             return pool.submit(fn, *args)
         return procs.submit(label, job, lambda: fn(*args))
@@ -185,22 +201,28 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
         # References first (this thread renders them while the rest compiles), then programs
         # with host-side preparation (object-space charts), then the others.
         for spec, path in pairs.values():
-            seq_cams = cams[spec.label, path.name]
+            ref_cams = cams[spec.label, path.name][warm:]
             missing = not all(cache.has(cache.reference_key(spec, c, study.reference,
-                                                            study.resolution)) for c in seq_cams)
+                                                            study.resolution)) for c in ref_cams)
             if missing and spec.label not in programs:
                 ref = study.reference
                 programs[spec.label] = submit(
                     f"the reference of {spec.label}", spec, path, ref.pipeline, ref.params,
-                    compile_reference, scenes[spec.label], seq_cams[0], ref, study.resolution)
-        has_prep = lambda v: hasattr(backend.pipeline(v.type).render, "compile_aot")  # noqa: E731
+                    False, compile_reference, scenes[spec.label], ref_cams[0], ref,
+                    study.resolution)
+        has_prep = lambda v: backend.pipeline(v.type).prepare is not no_prepare  # noqa: E731
         for spec, path, v in sorted(todo, key=lambda t: not has_prep(t[2])):
-            if program_key(spec, v) not in futures:
-                futures[program_key(spec, v)] = submit(
-                    f"{spec.label}/{v.label}", spec, path, v.type, v.params, compile_variant,
-                    study, scenes[spec.label], cams[spec.label, path.name][0], v)
+            seq_cams = cams[spec.label, path.name]
+            for frames in (len(seq_cams), 0):
+                key = program_key(spec, v, frames)
+                if key not in futures:
+                    what = f"{spec.label}/{v.label}" + (f" ({frames} frames)" if frames else "")
+                    args = (seq_cams, v) if frames else (seq_cams[warm], v)
+                    futures[key] = submit(what, spec, path, v.type, v.params, bool(frames),
+                                          partial(compile_variant, sequence=bool(frames)),
+                                          study, scenes[spec.label], *args)
         for spec, path in pairs.values():
-            reference_frames(scenes[spec.label], spec, cams[spec.label, path.name],
+            reference_frames(scenes[spec.label], spec, cams[spec.label, path.name][warm:],
                              study.reference, study.resolution, programs=programs)
         return {key: f.result() for key, f in futures.items()}
     finally:
@@ -209,29 +231,45 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def run_sequence(study: Study, scene, spec, path, cams, variant, refs, env, out_dir: Path,
-                 progress=None, compiled: timing.Compiled | None = None) -> list[dict]:
-    """Render, time and score one sequence; returns its rows (not yet stored)."""
+def _render_timed(study: Study, seq_prog, one_prog, scene, cams_all, cams):
+    """(frames of the sequence, its median ms, single-frame median ms per scored frame)."""
+    reps, warm = study.timing.repeats, study.timing.warmup
+    frames, seq_ms, _ = timing.time_call(seq_prog.call, scene, cams_all, repeats=reps,
+                                         warmup=warm)
+    for _ in range(warm):
+        timing.block(one_prog.call(scene, cams[0]))
+    single = [timing.time_call(one_prog.call, scene, cam, repeats=reps)[1] for cam in cams]
+    return frames, seq_ms, single
+
+
+def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, out_dir: Path,
+                 progress=None, compiled: tuple | None = None) -> list[dict]:
+    """Render one sequence (``cams_all``: the rendered path, warm-up frames first) as one
+    ``render_sequence`` program, time it and its single-frame program, score every scored
+    frame; returns its rows (not yet stored). ``compiled``: (sequence, single) programs."""
     w, h = study.resolution
-    comp = compiled or compile_variant(study, scene, cams[0], variant)
-    first_ms = None
-    if comp.method == "first_call":
-        t0 = time.perf_counter()
-        timing._block(comp.call(scene, cams[0]))
-        first_ms = (time.perf_counter() - t0) * 1e3
-    for _ in range(study.timing.warmup):
-        timing._block(comp.call(scene, cams[0]))
+    warm = study.warmup_frames
+    cams = cams_all[warm:]
+    seq_prog, one_prog = compiled or (
+        compile_variant(study, scene, cams_all, variant, sequence=True),
+        compile_variant(study, scene, cams[0], variant, sequence=False))
+    try:
+        frames, seq_ms, single_ms = _render_timed(study, seq_prog, one_prog, scene, cams_all,
+                                                  cams)
+    except PipelineOverflow as e:
+        raise PipelineOverflow(f"scene {spec.label!r}, path {path.name!r}, pipeline "
+                               f"{variant.label!r} {variant.params_json}: {e}") from None
     seq = _seq(study, spec, path, variant)
-    rows, images = [], []
-    for t, cam in enumerate(cams):
-        frame, ms, _ = timing.time_call(comp.call, scene, cam, repeats=study.timing.repeats)
-        img = np.asarray(frame.image, np.float32)
+    images = np.asarray(frames.image, np.float32)
+    counts_t = {k: np.asarray(v) for k, v in (frames.counts or {}).items()}
+    rows = []
+    for t in range(len(cams)):
+        img = images[t]
         ref = np.asarray(refs[t]["image"], np.float32)
         if img.shape != ref.shape:
             raise ValueError(f"pipeline {variant.label!r} returned an image of shape "
                              f"{img.shape}, the reference is {ref.shape}")
-        images.append(img)
-        counts = {k: _py(v) for k, v in (frame.counts or {}).items()}
+        counts = {k: _py(v[t]) for k, v in counts_t.items() if v.ndim == 1}
         counts = {k: v for k, v in counts.items() if v is not None}
         finite = bool(np.all(np.isfinite(img))) and all(
             math.isfinite(v) for v in counts.values() if isinstance(v, float))
@@ -240,39 +278,41 @@ def run_sequence(study: Study, scene, spec, path, cams, variant, refs, env, out_
             "seq": seq, "scene": spec.label, "camera_path": path.name,
             "pipeline": variant.label, "pipeline_type": variant.type,
             "params": dict(variant.params), "frame": t, "width": w, "height": h,
-            **metrics, **counts, "time_ms": ms, "compile_ms": comp.compile_ms,
-            "compile_method": comp.method, "compile_workers": COMPILE_WORKERS, "finite": finite,
-            **env,
+            **metrics, **counts, "time_ms": seq_ms / len(cams_all),
+            "time_ms_single": single_ms[t], "sequence_ms": seq_ms,
+            "sequence_frames": len(cams_all), "warmup_frames": warm,
+            "compile_ms": seq_prog.compile_ms, "compile_ms_single": one_prog.compile_ms,
+            "compile_method": seq_prog.method, "compile_workers": COMPILE_WORKERS,
+            "finite": finite, **env,
         }
         if "convergence_psnr" in refs[t]:
             row["reference_convergence_psnr"] = float(refs[t]["convergence_psnr"])
         rows.append(row)
         if t in study.save_frames:
-            meta = {k: row[k] for k in ("scene", "camera_path", "pipeline", "pipeline_type",
-                                         "params", "frame", "seq")}
-            aux = {f"aux_{k}": _small(v) for k, v in (frame.aux or {}).items()
-                   if np.asarray(v).ndim >= 1}
-            stem = f"{_slug(spec.label)}__{_slug(path.name)}__{seq}__f{t}"
-            _save_npz(out_dir / "images" / f"{stem}.npz", meta, image=_small(img),
-                      error=_small(err), **aux)
-            ref_stem = f"{_slug(spec.label)}__{_slug(path.name)}__reference__f{t}"
-            if not (out_dir / "images" / f"{ref_stem}.npz").exists():
-                _save_npz(out_dir / "images" / f"{ref_stem}.npz",
-                          {"scene": spec.label, "camera_path": path.name,
-                           "pipeline": "reference", "frame": t}, image=_small(ref))
+            aux = {k: np.asarray(v)[t] for k, v in (frames.aux or {}).items()}
+            _save_frame_images(out_dir, spec, path, seq, t, row, img, err, ref, aux)
         if progress is not None:
             progress.update(1)
-    if comp.method == "first_call":
-        med = float(np.median([r["time_ms"] for r in rows]))
-        for r in rows:
-            r["compile_ms"] = max(0.0, first_ms - med)
     seq_metrics, per_frame = backend.sequence_metrics(
-        np.stack(images), np.stack([np.asarray(r["image"], np.float32) for r in refs]),
-        study.metrics)
+        images, np.stack([np.asarray(r["image"], np.float32) for r in refs]), study.metrics)
     for r, te in zip(rows, per_frame):
         r.update(seq_metrics)
         r["temporal_error_frame"] = te
     return rows
+
+
+def _save_frame_images(out_dir, spec, path, seq, t, row, img, err, ref, aux) -> None:
+    meta = {k: row[k] for k in ("scene", "camera_path", "pipeline", "pipeline_type", "params",
+                                 "frame", "seq")}
+    aux = {f"aux_{k}": _small(v) for k, v in aux.items() if np.asarray(v).ndim >= 1}
+    stem = f"{_slug(spec.label)}__{_slug(path.name)}__{seq}__f{t}"
+    _save_npz(out_dir / "images" / f"{stem}.npz", meta, image=_small(img), error=_small(err),
+              **aux)
+    ref_stem = f"{_slug(spec.label)}__{_slug(path.name)}__reference__f{t}"
+    if not (out_dir / "images" / f"{ref_stem}.npz").exists():
+        _save_npz(out_dir / "images" / f"{ref_stem}.npz",
+                  {"scene": spec.label, "camera_path": path.name, "pipeline": "reference",
+                   "frame": t}, image=_small(ref))
 
 
 # ------------------------------------------------------------------ summary
@@ -382,8 +422,8 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
             if spec.label not in scenes:
                 scenes[spec.label] = backend.load_scene(spec.source, dict(spec.params))
             if (spec.label, path.name) not in cams:
-                cams[spec.label, path.name] = backend.make_cameras(scenes[spec.label], path,
-                                                                  *study.resolution)
+                cams[spec.label, path.name] = backend.make_cameras(
+                    scenes[spec.label], rendered_path(study, path), *study.resolution)
         bar.set_description("compiling; references")
         t0 = time.perf_counter()
         compiled = compile_all(study, todo, scenes, cams)
@@ -397,13 +437,14 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
                 if not variants:
                     continue
                 scene, seq_cams = scenes[spec.label], cams[spec.label, path.name]
-                refs = reference_frames(scene, spec, seq_cams, study.reference,
-                                        study.resolution)
+                refs = reference_frames(scene, spec, seq_cams[study.warmup_frames:],
+                                        study.reference, study.resolution)
                 for v in variants:
                     bar.set_description(f"{spec.label}/{path.name}: {v.label}")
+                    progs = (compiled[program_key(spec, v, len(seq_cams))],
+                             compiled[program_key(spec, v)])
                     rows = run_sequence(study, scene, spec, path, seq_cams, v, refs, env,
-                                        out_dir, progress=bar,
-                                        compiled=compiled[program_key(spec, v)])
+                                        out_dir, progress=bar, compiled=progs)
                     st.append(rows)
     finally:
         bar.close()

@@ -37,7 +37,7 @@ SSIM_MIN_SIDE = 11  # the 11-tap Gaussian window of Wang et al.
 
 _TOP_KEYS = {
     "name", "description", "resolution", "frames", "metrics", "figures", "save_frames",
-    "scenes", "paths", "pipelines", "reference", "timing",
+    "scenes", "paths", "pipelines", "reference", "timing", "warmup_frames",
 }
 _SCENE_KEYS = {"name", "label", "params"}
 _PATH_KEYS = {"name", "preset", "type", "frames", "params", "description"}
@@ -117,6 +117,9 @@ class Study:
     figures: tuple[str, ...]
     save_frames: tuple[int, ...]
     timing: TimingSpec
+    # Frames rendered before the scored ones of every path (the path runs that much longer
+    # and its first frames are dropped), so that temporal pipelines start with a warm history.
+    warmup_frames: int = 0
 
     @property
     def variants(self) -> tuple[Variant, ...]:
@@ -585,8 +588,9 @@ def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | N
     paths = _paths(ck, data.get("paths"), root, frames)
     pipelines = _pipelines(ck, data["pipelines"], root, resolution)
     reference = _reference(ck, data.get("reference"), resolution)
+    warmup_frames = ck.int_(data.get("warmup_frames", 0), "warmup_frames", lo=0)
     return Study(file, name, description, resolution, scenes, paths, pipelines, reference,
-                 metrics, figures, save_frames, timing)
+                 metrics, figures, save_frames, timing, warmup_frames)
 
 
 # ------------------------------------------------------------------ the resolved config
@@ -618,6 +622,7 @@ def to_toml(study: Study) -> str:
         f"metrics = {_toml_value(study.metrics)}",
         f"figures = {_toml_value(study.figures)}",
         f"save_frames = {_toml_value(study.save_frames)}",
+        f"warmup_frames = {study.warmup_frames}",
         "",
         "[reference]",
         f"pipeline = {_toml_value(study.reference.pipeline)}",

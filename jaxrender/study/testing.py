@@ -127,10 +127,12 @@ def install(monkeypatch, *, metrics: bool = True):
 
     registry._load_builtin_pipelines()
     monkeypatch.setitem(registry.REGISTRY, "flat",
-                        registry.Pipeline("flat", FlatConfig, render_flat, "fake: quantised"))
+                        registry.Pipeline("flat", FlatConfig, registry.FrameStep(render_flat),
+                                          description="fake: quantised"))
     monkeypatch.setitem(registry.REGISTRY, "reference",
-                        registry.Pipeline("reference", RefConfig, render_reference,
-                                          "fake: smooth ground truth"))
+                        registry.Pipeline("reference", RefConfig,
+                                          registry.FrameStep(render_reference),
+                                          description="fake: smooth ground truth"))
     colors = {"tiny": (1.0, 0.8, 0.6), "tiny2": (0.3, 0.9, 0.5)}
 
     def load_scene(source, params):

@@ -29,19 +29,26 @@ def _plan(study_file):
     study = load_study(study_file)
     todo = [(s, p, v) for s in study.scenes for p in study.paths for v in study.variants]
     scenes = {s.label: backend.load_scene(s.source, dict(s.params)) for s in study.scenes}
-    cams = {(s.label, p.name): backend.make_cameras(scenes[s.label], p, *study.resolution)
+    cams = {(s.label, p.name): backend.make_cameras(scenes[s.label],
+                                                   runner.rendered_path(study, p),
+                                                   *study.resolution)
             for s in study.scenes for p in study.paths}
     return study, todo, scenes, cams
 
 
 def _frames(study, todo, scenes, cams, compiled):
+    """Every frame of the single-frame programs and every sequence program's output."""
     out = {}
     for s, p, v in todo:
+        seq_cams = cams[s.label, p.name]
         prog = compiled[runner.program_key(s, v)]
-        for t, cam in enumerate(cams[s.label, p.name]):
+        for t, cam in enumerate(seq_cams):
             f = prog.call(scenes[s.label], cam)
-            out[s.label, p.name, v.label, v.params_json, t] = jax.tree.map(np.asarray, (f.image, f.counts,
-                                                                          f.aux))
+            out[s.label, p.name, v.label, v.params_json, t] = jax.tree.map(
+                np.asarray, (f.image, f.counts, f.aux))
+        f = compiled[runner.program_key(s, v, len(seq_cams))].call(scenes[s.label], seq_cams)
+        out[s.label, p.name, v.label, v.params_json, "sequence"] = jax.tree.map(
+            np.asarray, (f.image, f.counts, f.aux))
     return out
 
 
@@ -73,7 +80,10 @@ def _compile(monkeypatch, mode, plan, tmp_path):
 
 
 def _keys(plan):
-    return {runner.program_key(s, v) for s, _, v in plan[1]}
+    """Per scene and variant: the single-frame program and one sequence program per length."""
+    study, todo, _, cams = plan
+    return ({runner.program_key(s, v) for s, _, v in todo}
+            | {runner.program_key(s, v, len(cams[s.label, p.name])) for s, p, v in todo})
 
 
 def _notes(caplog):
@@ -152,8 +162,8 @@ type = "object_space"
 
 @pytest.mark.slow
 def test_real_object_space(tmp_path, monkeypatch):
-    """A real pipeline with host-side preparation (compile_aot_parts: the sheet comes back
-    from the worker) and the real reference, both ways."""
+    """A real pipeline with host-side preparation (the sheet comes back from the worker in
+    the program's Prepared arguments) and the real reference, both ways."""
     f = tmp_path / "real.toml"
     f.write_text(REAL)
     plan = _plan(f)

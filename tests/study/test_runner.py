@@ -1,6 +1,7 @@
 """The runner end to end on a tiny study with fake scenes, pipelines and metrics."""
 
 import csv
+import dataclasses
 import os
 
 
@@ -114,7 +115,7 @@ def test_reference_cached(tiny_study, tmp_path, monkeypatch):
         return testing.render_reference(scene, camera, cfg)
 
     p = registry.REGISTRY["reference"]
-    monkeypatch.setitem(registry.REGISTRY, "reference", p._replace(render=counted))
+    monkeypatch.setitem(registry.REGISTRY, "reference", dataclasses.replace(p, step=registry.FrameStep(counted)))
     _run(tiny_study, tmp_path / "a", figures=False)
     first = len(calls)
     assert first > 0
@@ -133,7 +134,7 @@ def test_convergence_warning(tiny_study, tmp_path, monkeypatch):
         return Frame(f.image, {"convergence_psnr": 20.0}, {})
 
     p = registry.REGISTRY["reference"]
-    monkeypatch.setitem(registry.REGISTRY, "reference", p._replace(render=poor))
+    monkeypatch.setitem(registry.REGISTRY, "reference", dataclasses.replace(p, step=registry.FrameStep(poor)))
     res, logs = _run(tiny_study, tmp_path / "run", figures=False)
     assert res.warnings and "may not be converged" in res.warnings[0]
     assert any(line.startswith("warning:") for line in logs)

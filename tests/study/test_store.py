@@ -60,22 +60,18 @@ def test_csv_columns(tmp_path):
 
 
 def test_timing_median_and_compile():
-    def render(scene, camera, cfg):
-        return scene * cfg + camera
+    from jaxrender.pipelines import registry
+    from jaxrender.types import Frame
 
-    comp = timing.compile_render(render, jnp.ones(4), jnp.float32(2.0), 3.0)
+    def frame(scene, camera, cfg):
+        return Frame(scene * cfg.width + camera, {}, {})
+
+    pipe = registry.Pipeline("affine", registry.RenderConfig, registry.FrameStep(frame))
+    comp = timing.compile_program(pipe, jnp.ones(4), jnp.float32(2.0),
+                                  registry.RenderConfig(width=3, height=1))
     assert comp.method == "aot" and comp.compile_ms > 0
     out, med, samples = timing.time_call(comp.call, jnp.ones(4), jnp.float32(1.0), repeats=3,
                                          warmup=1)
-    assert float(out[0]) == 4.0 and len(samples) == 3 and min(samples) <= med <= max(samples)
+    assert float(out.image[0]) == 4.0 and len(samples) == 3 and min(samples) <= med <= max(samples)
     info = timing.device_info()
     assert info["device"].startswith("cpu") and info["jax_version"]
-
-
-def test_timing_falls_back_for_host_side_pipelines():
-    def render(scene, camera, cfg):
-        return scene * float(camera)  # concretises a traced value: cannot be lowered
-
-    comp = timing.compile_render(render, jnp.ones(2), jnp.float32(2.0), None)
-    assert comp.method == "first_call"
-    assert float(comp.call(jnp.ones(2), jnp.float32(2.0))[0]) == 2.0

@@ -1,0 +1,214 @@
+"""The one place a pipeline is compiled and run: ``render`` (one step from ``init``) and
+``render_sequence`` (a ``lax.scan`` of ``step`` over a camera path), for every registered
+pipeline alike.
+
+Both go through one jitted function, ``_program``, whose static arguments are the Pipeline,
+the config (its TRACED_FIELDS replaced by their defaults) and the mode (one frame, or a
+sequence with a number of warm-up frames to drop); the scene, the pipeline's prepared static
+data, the cameras and the traced config fields are its arguments. So moving the camera or
+sweeping a traced field never recompiles, and a sequence compiles once per (scene shape, path
+length, config).
+
+``lower`` and ``bind`` split the ahead-of-time path in two picklable halves (the study compiles
+in worker processes); ``compile`` joins them. Every result passes ``check_overflow``: a frame
+whose ``overflow`` count is non-zero raises PipelineOverflow, naming the pipeline, the frames
+and what to raise (principle 5). Under an outer trace the count stays in the Frame and the
+image is NaN.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.scene.camera import Camera
+from jaxrender.types import Frame
+
+
+class PipelineOverflow(OverflowError):
+    """A frame exceeded a capacity of its pipeline; its work would have been dropped."""
+
+
+# ---------------------------------------------------------------- traced config fields
+
+
+def split_config(cfg) -> tuple[Any, dict]:
+    """(cfg with its TRACED_FIELDS at their defaults, {field: value as an array})."""
+    names = type(cfg).TRACED_FIELDS
+    if not names:
+        return cfg, {}
+    defaults = {f.name: f.default for f in dataclasses.fields(cfg) if f.name in names}
+    # The dtype follows the field's default, so a threshold given as 0 or 0.0 is one program.
+    dtype = lambda d: jnp.float32 if isinstance(d, float) else jnp.int32  # noqa: E731
+    traced = {n: jnp.asarray(getattr(cfg, n), dtype(defaults[n])) for n in names}
+    return dataclasses.replace(cfg, **defaults), traced
+
+
+def join_config(static_cfg, traced: dict):
+    """The config a step sees inside the program: the static one with the traced values set.
+    Set without __init__, whose checks need concrete values; the values were checked when the
+    user's config was built."""
+    if not traced:
+        return static_cfg
+    cfg = copy.copy(static_cfg)
+    for name, value in traced.items():
+        object.__setattr__(cfg, name, value)
+    return cfg
+
+
+# ---------------------------------------------------------------- the program
+
+
+def _first(cameras: Camera) -> Camera:
+    return jax.tree_util.tree_map(lambda a: a[0], cameras)
+
+
+def _program(pipe, static_cfg, mode, scene, static, cameras, traced):
+    cfg = join_config(static_cfg, traced)
+    if mode == "frame":
+        state = pipe.init(scene, static, cameras, cfg)
+        frame, _ = pipe.step(scene, static, state, cameras, jnp.int32(0), cfg)
+        return frame
+    _, skip = mode
+    n = int(np.shape(jax.tree_util.tree_leaves(cameras)[0])[0])
+
+    def body(state, xs):
+        camera, t = xs
+        frame, state = pipe.step(scene, static, state, camera, t, cfg)
+        return state, frame
+
+    state = pipe.init(scene, static, _first(cameras), cfg)
+    _, frames = jax.lax.scan(body, state, (cameras, jnp.arange(n, dtype=jnp.int32)))
+    return jax.tree_util.tree_map(lambda a: a[skip:], frames) if skip else frames
+
+
+_program_jit = jax.jit(_program, static_argnums=(0, 1, 2))
+
+
+def cache_size() -> int:
+    """Programs compiled so far in this process (tests: a camera move must not add one)."""
+    return _program_jit._cache_size()
+
+
+# ---------------------------------------------------------------- arguments and checks
+
+
+def stack_cameras(cameras) -> Camera:
+    """A Camera batched over a leading frame axis from a CameraPath, a batched Camera or a
+    list of cameras (or of (camera, previous) pairs)."""
+    if hasattr(cameras, "cameras"):  # a CameraPath
+        return cameras.cameras
+    if isinstance(cameras, (list, tuple)):
+        cams = [c[0] if isinstance(c, tuple) else c for c in cameras]
+        if not cams:
+            raise ValueError("render_sequence: the camera path is empty")
+        return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *cams)
+    return cameras
+
+
+def _mode(sequence: bool, warmup_frames: int, n_frames: int):
+    if not sequence:
+        return "frame"
+    skip = int(warmup_frames)
+    if skip < 0 or skip >= n_frames:
+        raise ValueError(f"warmup_frames must be in [0, {n_frames}) for a path of {n_frames} "
+                         f"frames, got {warmup_frames}")
+    return ("sequence", skip)
+
+
+def _is_traced(*trees) -> bool:
+    return any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(trees))
+
+
+def check_overflow(pipe, cfg, frame: Frame) -> Frame:
+    """Raise PipelineOverflow when any frame of ``frame`` (one or a sequence) overflowed."""
+    over = (frame.counts or {}).get("overflow")
+    if over is None or isinstance(over, jax.core.Tracer):
+        return frame
+    over = np.atleast_1d(np.asarray(over))
+    bad = np.flatnonzero(over > 0)
+    if bad.size:
+        where = "" if over.size == 1 else f" in frame(s) {bad[:8].tolist()}"
+        raise PipelineOverflow(f"{pipe.name}: {int(over[bad].sum())} overflow(s){where}: "
+                               f"{cfg.overflow_hint()}")
+    return frame
+
+
+# ---------------------------------------------------------------- entry points
+
+
+def render(pipe, scene, camera, cfg) -> Frame:
+    """One frame of ``pipe`` from its initial state, overflow-checked."""
+    static = pipe.prepare(scene, cfg)
+    static_cfg, traced = split_config(cfg)
+    frame = _program_jit(pipe, static_cfg, "frame", scene, static, camera, traced)
+    return frame if _is_traced(scene, camera) else check_overflow(pipe, cfg, frame)
+
+
+def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0) -> Frame:
+    """Frames of a camera path through ``pipe``'s steps, state carried, warm-up dropped."""
+    cameras = stack_cameras(cameras)
+    n = int(np.shape(cameras.eye)[0])
+    mode = _mode(True, warmup_frames, n)
+    static = pipe.prepare(scene, cfg)
+    static_cfg, traced = split_config(cfg)
+    frames = _program_jit(pipe, static_cfg, mode, scene, static, cameras, traced)
+    return frames if _is_traced(scene, cameras) else check_overflow(pipe, cfg, frames)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """What a lowered program needs besides its compiled code: the pipeline's static data and
+    the traced config values. Picklable (it crosses to the study's compile workers)."""
+
+    static: Any
+    traced: dict
+    sequence: bool
+
+
+def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0):
+    """(jax Lowered program, Prepared) for ``pipe`` on this scene and camera (a single camera,
+    or a batched path when ``sequence``). Host-side preparation happens here."""
+    if sequence:
+        cameras = stack_cameras(cameras)
+    n = int(np.shape(cameras.eye)[0]) if sequence else 1
+    mode = _mode(sequence, warmup_frames, n)
+    static = pipe.prepare(scene, cfg)
+    static_cfg, traced = split_config(cfg)
+    lowered = _program_jit.lower(pipe, static_cfg, mode, scene, static, cameras, traced)
+    return lowered, Prepared(static, traced, sequence)
+
+
+def bind(pipe, cfg, compiled, prepared: Prepared) -> Callable:
+    """``call(scene, cameras) -> Frame``: the compiled program with its prepared arguments,
+    overflow-checked like ``render``."""
+
+    def call(scene, cameras):
+        if prepared.sequence:
+            cameras = stack_cameras(cameras)
+        frame = compiled(scene, prepared.static, cameras, prepared.traced)
+        return check_overflow(pipe, cfg, frame)
+
+    return call
+
+
+def compile(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0
+            ) -> tuple[Callable, float]:
+    """Ahead of time: (``call(scene, cameras) -> Frame``, compile ms including preparation)."""
+    t0 = time.perf_counter()
+    lowered, prepared = lower(pipe, scene, cameras, cfg, sequence=sequence,
+                              warmup_frames=warmup_frames)
+    compiled = lowered.compile()
+    return bind(pipe, cfg, compiled, prepared), (time.perf_counter() - t0) * 1e3
+
+
+__all__ = ["PipelineOverflow", "Prepared", "bind", "cache_size", "check_overflow", "compile",
+           "join_config", "lower", "render", "render_sequence", "split_config",
+           "stack_cameras"]
