@@ -12,9 +12,9 @@ from __future__ import annotations
 import argparse
 
 from jaxrender.bench.pipelines import parse_spec as parse_variant
-from jaxrender.pipelines import get_pipeline, make_config
+from jaxrender.pipelines import get_pipeline, make_config, program
 from jaxrender.scene import load_scene
-from jaxrender.study.timing import compile_render, device_info, time_call
+from jaxrender.study.timing import device_info, time_call
 
 DEFAULT_VARIANTS = ("forward", "forward:z_prepass=true", "deferred", "visbuffer",
                     "visbuffer:vrs=fixed")
@@ -39,10 +39,10 @@ def main(argv=None) -> None:
         for variant in a.variants:
             name, params = parse_variant(variant)
             cfg = make_config(name, width=a.width, height=a.height, **params)
-            comp = compile_render(get_pipeline(name).render, scene, scene.camera, cfg)
-            frame, ms, _ = time_call(comp.call, scene, scene.camera, repeats=a.repeats, warmup=1)
+            call, compile_ms = program.compile(get_pipeline(name), scene, scene.camera, cfg)
+            frame, ms, _ = time_call(call, scene, scene.camera, repeats=a.repeats, warmup=1)
             c = {k: float(v) for k, v in frame.counts.items()}
-            print(f"| {scene_name} | {variant} | {ms:.2f} | {comp.compile_ms:.0f} | "
+            print(f"| {scene_name} | {variant} | {ms:.2f} | {compile_ms:.0f} | "
                   f"{c['shade_invocations']:.0f} | {c['helper_lanes']:.0f} | "
                   f"{c['overshading']:.3f} | {c['waves']:.0f} | {c['lane_utilization']:.3f} | "
                   f"{c['bytes_intermediate']:.0f} |", flush=True)

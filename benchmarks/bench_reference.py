@@ -12,12 +12,12 @@ by default (JAX_PLATFORMS), a GPU when jax has one.
 from __future__ import annotations
 
 import argparse
-import time
+import dataclasses
 
 import jax
-import jax.numpy as jnp
 
-from jaxrender.pipelines.reference import ReferenceConfig, _ldr_psnr, _program_cfg, _render_jit
+from jaxrender.pipelines import get_pipeline, program
+from jaxrender.pipelines.reference import ReferenceConfig, ldr_psnr
 from jaxrender.scene import default_camera, list_builtin_scenes, load_scene
 from jaxrender.study.timing import device_info, time_call
 
@@ -27,16 +27,17 @@ def bench(scenes, width, height, ks, repeats) -> None:
     print("| scene | resolution | k | samples/px | compile s | median ms | shaded samples "
           "| Msamples/s |")
     print("|---|---|---|---|---|---|---|---|")
+    pipe = get_pipeline("reference")
     for name in scenes:
         scene = load_scene(name)
         cam = default_camera(scene)
-        base = _program_cfg(ReferenceConfig(width=width, height=height))
-        t0 = time.perf_counter()
-        compiled = _render_jit.lower(scene, cam, jnp.int32(ks[0]), base).compile()
-        compile_s = time.perf_counter() - t0
+        base = ReferenceConfig(width=width, height=height, k=ks[0])
+        _, compile_ms = program.compile(pipe, scene, cam, base)
+        compile_s = compile_ms / 1e3
         for k in ks:
-            frame, ms, _ = time_call(compiled, scene, cam, jnp.int32(k), repeats=repeats,
-                                     warmup=1)
+            # k is traced: every k runs the one program (its jit compile is in the warm-up call)
+            cfg = dataclasses.replace(base, k=k)
+            frame, ms, _ = time_call(pipe.render, scene, cam, cfg, repeats=repeats, warmup=1)
             shaded = int(frame.counts["shade_invocations"])
             rate = shaded / (ms * 1e-3) / 1e6
             print(f"| {name} | {width}x{height} | {k} | {k * k} | {compile_s:.1f} | {ms:.1f} "
@@ -47,15 +48,16 @@ def convergence(scenes, width, height, ks) -> None:
     print(f"device: {device_info()['device']}, jax {jax.__version__}\n")
     print("| scene | resolution | k | 2k | PSNR(k, 2k) dB (LDR) |")
     print("|---|---|---|---|---|")
+    pipe = get_pipeline("reference")
     for name in scenes:
         scene = load_scene(name)
         cam = default_camera(scene)
-        base = _program_cfg(ReferenceConfig(width=width, height=height))
+        base = ReferenceConfig(width=width, height=height)
         images = {}
         for k in sorted(set(ks) | {2 * k for k in ks}):
-            images[k] = _render_jit(scene, cam, jnp.int32(k), base).image
+            images[k] = pipe.render(scene, cam, dataclasses.replace(base, k=k)).image
         for k in ks:
-            p = float(_ldr_psnr(images[k], images[2 * k]))
+            p = float(ldr_psnr(images[k], images[2 * k]))
             print(f"| {name} | {width}x{height} | {k} | {2 * k} | {p:.2f} |", flush=True)
 
 

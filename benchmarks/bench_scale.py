@@ -77,12 +77,14 @@ def scale_rows(label, fn, scene, cameras, cfg, n_frames, repeats, chunk, extract
 
 
 def dacs_sweep_rows(scene, camera, width, height, thresholds, repeats, chunk):
-    from jaxrender.pipelines import dacs, make_config
+    from jaxrender.pipelines import dacs, make_config, program
 
     cfg = make_config("dacs", width=width, height=height)
 
     def point(thr, scene, camera):
-        return dacs.render_threshold(scene, camera, thr, cfg).image
+        # thr is traced under sharded_map, so not dataclasses.replace (its checks need a
+        # concrete value): set the traced field as the program does
+        return dacs.render(scene, camera, program.join_config(cfg, {"threshold": thr})).image
 
     thr = jnp.asarray(thresholds, jnp.float32)
     loop_out, med, comp = _time(lambda: [point(t, scene, camera) for t in thr], repeats)

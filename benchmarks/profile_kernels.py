@@ -156,6 +156,7 @@ def main(argv=None) -> int:
         return 0
     from jaxrender.bench.pipelines import parse_spec
     from jaxrender.pipelines import get_pipeline, make_config
+    from jaxrender.pipelines.registry import no_prepare
     from jaxrender.scene import default_camera, load_scene
 
     name, params = parse_spec(args.scene)
@@ -165,15 +166,19 @@ def main(argv=None) -> int:
     _, overrides = parse_spec(args.what + ":" + ",".join(args.set))  # TOML values
     cfg = make_config(args.what, width=w, height=h, **overrides)
     label = f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}"
-    if args.what == "object_space":  # its charts are built on the host, outside the program
-        from jaxrender.pipelines import object_space
+    if pipe.prepare is not no_prepare:  # object_space: charts built on the host, outside
+        import jax.numpy as jnp
 
-        sheet = object_space.prepare(sc, cfg)
-        profile_call(lambda s, c, sh: object_space._one(s, sh, c, cfg), sc, cam, sheet,
-                     calls=args.calls, top=args.top, label=label)
+        static = pipe.prepare(sc, cfg)
+
+        def one_frame(s, c, st):  # what pipe.render compiles: one step from the initial state
+            frame, _ = pipe.step(s, st, pipe.init(s, st, c, cfg), c, jnp.int32(0), cfg)
+            return frame
+
+        profile_call(one_frame, sc, cam, static, calls=args.calls, top=args.top, label=label)
         return 0
-    fn = getattr(pipe.render, "jitted", pipe.render)
-    profile_call(lambda s, c: fn(s, c, cfg), sc, cam, calls=args.calls, top=args.top, label=label)
+    profile_call(lambda s, c: pipe.render(s, c, cfg), sc, cam, calls=args.calls, top=args.top,
+                 label=label)
     return 0
 
 

@@ -213,7 +213,7 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
         has_prep = lambda v: backend.pipeline(v.type).prepare is not no_prepare  # noqa: E731
         for spec, path, v in sorted(todo, key=lambda t: not has_prep(t[2])):
             seq_cams = cams[spec.label, path.name]
-            for frames in (len(seq_cams), 0):
+            for frames in (len(seq_cams), 0) if study.timing.single_frame else (len(seq_cams),):
                 key = program_key(spec, v, frames)
                 if key not in futures:
                     what = f"{spec.label}/{v.label}" + (f" ({frames} frames)" if frames else "")
@@ -232,10 +232,13 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
 
 
 def _render_timed(study: Study, seq_prog, one_prog, scene, cams_all, cams):
-    """(frames of the sequence, its median ms, single-frame median ms per scored frame)."""
+    """(frames of the sequence, its median ms, single-frame median ms per scored frame or
+    NaN without a single-frame program)."""
     reps, warm = study.timing.repeats, study.timing.warmup
     frames, seq_ms, _ = timing.time_call(seq_prog.call, scene, cams_all, repeats=reps,
                                          warmup=warm)
+    if one_prog is None:
+        return frames, seq_ms, [float("nan")] * len(cams)
     for _ in range(warm):
         timing.block(one_prog.call(scene, cams[0]))
     single = [timing.time_call(one_prog.call, scene, cam, repeats=reps)[1] for cam in cams]
@@ -252,7 +255,8 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
     cams = cams_all[warm:]
     seq_prog, one_prog = compiled or (
         compile_variant(study, scene, cams_all, variant, sequence=True),
-        compile_variant(study, scene, cams[0], variant, sequence=False))
+        compile_variant(study, scene, cams[0], variant, sequence=False)
+        if study.timing.single_frame else None)
     try:
         frames, seq_ms, single_ms = _render_timed(study, seq_prog, one_prog, scene, cams_all,
                                                   cams)
@@ -281,7 +285,8 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
             **metrics, **counts, "time_ms": seq_ms / len(cams_all),
             "time_ms_single": single_ms[t], "sequence_ms": seq_ms,
             "sequence_frames": len(cams_all), "warmup_frames": warm,
-            "compile_ms": seq_prog.compile_ms, "compile_ms_single": one_prog.compile_ms,
+            "compile_ms": seq_prog.compile_ms,
+            "compile_ms_single": one_prog.compile_ms if one_prog else float("nan"),
             "compile_method": seq_prog.method, "compile_workers": COMPILE_WORKERS,
             "finite": finite, **env,
         }
@@ -442,7 +447,7 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
                 for v in variants:
                     bar.set_description(f"{spec.label}/{path.name}: {v.label}")
                     progs = (compiled[program_key(spec, v, len(seq_cams))],
-                             compiled[program_key(spec, v)])
+                             compiled.get(program_key(spec, v)))
                     rows = run_sequence(study, scene, spec, path, seq_cams, v, refs, env,
                                         out_dir, progress=bar, compiled=progs)
                     st.append(rows)

@@ -44,7 +44,7 @@ _PATH_KEYS = {"name", "preset", "type", "frames", "params", "description"}
 _PIPE_KEYS = {"type", "label", "preset", "params", "sweep", "sweep_mode", "description"}
 _PRESET_PIPE_KEYS = {"type", "params", "sweep", "sweep_mode", "description"}
 _REF_KEYS = {"pipeline", "params", "check_convergence", "min_margin_db"}
-_TIMING_KEYS = {"warmup", "repeats"}
+_TIMING_KEYS = {"warmup", "repeats", "single_frame"}
 
 
 # ------------------------------------------------------------------ the validated objects
@@ -101,6 +101,9 @@ class ReferenceSpec:
 class TimingSpec:
     warmup: int = 1
     repeats: int = 3
+    # Also compile and time each variant's single-frame program (time_ms_single beside the
+    # per-frame time in the sequence); false compiles one program per variant, not two.
+    single_frame: bool = True
 
 
 @dataclass(frozen=True)
@@ -583,7 +586,8 @@ def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | N
     timing_raw = ck.table(data.get("timing", {}), "timing")
     ck.keys(timing_raw, "timing", _TIMING_KEYS)
     timing = TimingSpec(ck.int_(timing_raw.get("warmup", 1), "timing.warmup", lo=0),
-                        ck.int_(timing_raw.get("repeats", 3), "timing.repeats", lo=1))
+                        ck.int_(timing_raw.get("repeats", 3), "timing.repeats", lo=1),
+                        ck.bool_(timing_raw.get("single_frame", True), "timing.single_frame"))
     scenes = _scenes(ck, data["scenes"], root, study_dir)
     paths = _paths(ck, data.get("paths"), root, frames)
     pipelines = _pipelines(ck, data["pipelines"], root, resolution)
@@ -633,6 +637,7 @@ def to_toml(study: Study) -> str:
         "[timing]",
         f"warmup = {study.timing.warmup}",
         f"repeats = {study.timing.repeats}",
+        f"single_frame = {_toml_value(study.timing.single_frame)}",
     ]
     for s in study.scenes:
         lines += ["", "[[scenes]]", f"name = {_toml_value(s.source)}",

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import checkerboard as cb
-from jaxrender.pipelines import deferred, make_config
+from jaxrender.pipelines import deferred, make_config, program
 from jaxrender.pipelines.pixel_ids import lod_scaled
 from jaxrender.scene import look_at
 from jaxrender.scene.camera_path import pan
@@ -55,9 +55,9 @@ def test_camera_path_does_not_recompile_and_rejects_history():
     scene = shapes_scene()
     path = pan(scene.camera, 3, 2.0, H)
     seq = cb.render_sequence(scene, path, _cfg())
-    size = cb._sequence_jit._cache_size()
+    size = program.cache_size()
     cb.render_sequence(scene, pan(scene.camera, 3, -1.5, H), _cfg())
-    assert cb._sequence_jit._cache_size() == size
+    assert program.cache_size() == size
     # a 2-pixel pan: most history is reused, the column entering the screen is rejected
     assert int(seq.counts["history_reads"][1]) > W * H // 4
     assert int(seq.counts["history_rejected"][1]) > 0

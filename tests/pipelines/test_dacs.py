@@ -3,6 +3,7 @@ a ramp and a step under an image-lookup shader, borders and odd sizes, the warp 
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import jax
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import dacs as dacs_mod
-from jaxrender.pipelines import deferred, make_config
+from jaxrender.pipelines import deferred, make_config, program
 from jaxrender.pipelines.dacs_levels import level_map, level_pixels, n_levels, parent_pairs
 from jaxrender.pipelines.dacs_warp import simulate
 from tests.pipelines.dacs_scenes import H, W, flat_scene, shapes_scene
@@ -83,12 +84,14 @@ def test_infinite_threshold_on_flat_single_id_scene_shades_one_sixteenth():
 
 def test_threshold_sweep_is_monotone_and_compiles_once():
     scene = shapes_scene()
-    n = [int(dacs_mod.render_threshold(scene, scene.camera, t, _cfg()).counts["shade_invocations"])
+    cfg = _cfg()
+    n = [int(dacs_mod.render(scene, scene.camera, dataclasses.replace(cfg, threshold=t))
+             .counts["shade_invocations"])
          for t in (0.0, 1e-4, 1e-2, float("inf"))]
     assert n == sorted(n, reverse=True) and n[0] == W * H and n[-1] < W * H // 2
-    size = dacs_mod._render_jit._cache_size()
-    dacs_mod.render_threshold(scene, scene.camera, 0.5, _cfg(threshold=0.3))
-    assert dacs_mod._render_jit._cache_size() == size
+    size = program.cache_size()
+    dacs_mod.render(scene, scene.camera, _cfg(threshold=0.5))  # a new threshold, same program
+    assert program.cache_size() == size
 
 
 # ------------------------------------------------------------------ image-lookup shading

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from fdv_scenes import FOLIAGE_CARDS, H, W, foliage_scene, make_scene, rect_part, tri_part
 
-from jaxrender.pipelines import COUNT_KEYS, get_pipeline, make_config
+from jaxrender.pipelines import COUNT_KEYS, get_pipeline, make_config, program
 
 FORWARD = get_pipeline("forward")
 NEAR = rect_part(0, 0, 4, 4, 2.0)  # 16 pixels
@@ -80,11 +80,11 @@ def test_camera_move_does_not_recompile():
     scene = make_scene([NEAR, FAR])
     cfg = make_config("forward", width=W, height=H)
     FORWARD.render(scene, scene.camera, cfg)
-    before = FORWARD.render.jitted._cache_size()
+    before = program.cache_size()
     moved = jax.tree_util.tree_map(lambda a: a, scene.camera)
     moved = type(moved)(moved.eye + 0.01, moved.rotation, moved.fov_y, moved.near, moved.far)
     FORWARD.render(scene, moved, cfg)
-    assert FORWARD.render.jitted._cache_size() == before
+    assert program.cache_size() == before
 
 
 def test_config_rejects_bad_values():

@@ -11,16 +11,14 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrender.pipelines import get_pipeline, make_config
+from jaxrender.pipelines import get_pipeline, make_config, program
 from jaxrender.pipelines.reference import (
     DEFAULT_K,
     ReferenceConfig,
     _bary_at,
     _offset,
-    _render_jit,
     convergence_psnr,
     render,
-    render_path,
 )
 from jaxrender.raster import rasterize
 from jaxrender.raster import samples as sample_patterns
@@ -150,15 +148,15 @@ def test_lod_follows_the_sample_footprint(scene_a):
 
 def test_one_compile_for_any_camera_and_k(scene_a):
     render(scene_a, _camera(), _cfg(2))
-    before = _render_jit._cache_size()
+    before = program.cache_size()
     for x, k in ((0.1, 2), (-0.2, 3), (0.05, 8)):
         render(scene_a, _camera(x), _cfg(k))
-    assert _render_jit._cache_size() == before
+    assert program.cache_size() == before
 
 
 def test_camera_path_equals_frame_by_frame(scene_a):
     cams = [_camera(0.0), _camera(0.15)]
-    frames = render_path(scene_a, stack(cams), _cfg(2))
+    frames = get_pipeline("reference").render_sequence(scene_a, stack(cams), _cfg(2))
     assert frames.image.shape == (2, H, W, 3)
     assert frames.counts["shade_invocations"].shape == (2,)
     for t, cam in enumerate(cams):

@@ -45,7 +45,7 @@ def test_ids_in_the_frame_decode_to_the_triangles():
 
 def test_an_id_field_overflow_is_counted():
     # Each rectangle is an object (instance): with 0 instance bits the second one overflows.
-    # (render() raises OverflowError on any counted overflow; see base.pipeline_entry.)
+    # (render() raises OverflowError on any counted overflow; see program.check_overflow.)
     scene = make_scene([rect_part(0, 0, 4, 4, 2.0), rect_part(2, 2, 6, 6, 4.0)])
     tri = np.array([[0, 1, 2, 3, -1]], np.int32)
     _, over = encode(scene, tri, IdLayout(16, 7, 0))

@@ -2,6 +2,7 @@
 
 import csv
 import dataclasses
+import json
 import os
 
 
@@ -183,6 +184,13 @@ def test_kill_9_leaves_no_half_row(tiny_study, tmp_path):
     assert res.skipped == len(done) and res.computed == 6 - len(done)
     assert len(res.rows) == 18
     assert len(store.read_rows(out / "results.jsonl")) == 18
+    # the same results as a run never interrupted (timings aside)
+    whole, _ = _run(tiny_study, tmp_path / "whole", figures=False)
+    skip = {"time_ms", "time_ms_single", "sequence_ms", "compile_ms", "compile_ms_single"}
+    key = lambda r: (r["seq"], r["frame"])  # noqa: E731
+    same = lambda r: json.dumps({k: v for k, v in r.items() if k not in skip},  # noqa: E731
+                                sort_keys=True)  # as JSON, so that NaN equals NaN
+    assert {key(r): same(r) for r in res.rows} == {key(r): same(r) for r in whole.rows}
 
 
 def test_real_metrics(fake, tiny_study, tmp_path, monkeypatch):

@@ -1,0 +1,101 @@
+"""Per-frame time of every pipeline inside a sequence (``render_sequence``: one program, a
+``lax.scan`` of the pipeline's step over the path) against single-frame calls (``render``'s
+program called once per camera), on the same cameras.
+
+    python benchmarks/bench_sequence.py --scenes terrain foliage --resolution 1920x1080 \
+        --frames 60 --rounds 5
+
+Programs are compiled ahead of time (in threads: XLA compiles outside the GIL) before anything
+is timed. Each round times the whole sequence once and then the single-frame program once on
+every camera of the path, so the two are interleaved on the noisy lent machine; the table
+gives the medians over rounds of (sequence ms / frames) and of the per-round mean single call,
+and their ratio (sequence per frame / single: below 1 the sequence is faster).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import jax
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks.common import environment, print_table  # noqa: E402
+from jaxrender.pipelines import list_pipelines, make_config, program  # noqa: E402
+from jaxrender.scene import load_scene  # noqa: E402
+from jaxrender.scene.camera_path import pan  # noqa: E402
+from jaxrender.study.schema import parse_resolution  # noqa: E402
+
+
+def _compile_both(pipe, scene, path, cfg):
+    seq, seq_ms = program.compile(pipe, scene, path, cfg, sequence=True)
+    one, one_ms = program.compile(pipe, scene, path[0], cfg)
+    return seq, one, seq_ms / 1e3, one_ms / 1e3
+
+
+def _time(fn, *args) -> float:
+    t0 = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    return (time.perf_counter() - t0) * 1e3
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", nargs="+", default=["terrain", "foliage"])
+    ap.add_argument("--pipelines", nargs="+", default=None, help="default: every registered")
+    ap.add_argument("--resolution", default="1920x1080")
+    ap.add_argument("--frames", type=int, default=60)
+    ap.add_argument("--pixels-per-frame", type=float, default=1.0)
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--json", default=None, help="write the rows here")
+    a = ap.parse_args(argv)
+    w, h = parse_resolution(a.resolution)
+    names = a.pipelines or [p.name for p in list_pipelines()]
+    env = environment()
+    print(f"# {env}", flush=True)
+    jobs = {}
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        for sname in a.scenes:
+            scene = load_scene(sname)
+            cams = pan(scene.camera, a.frames, a.pixels_per_frame, h).cameras
+            path = [jax.tree_util.tree_map(lambda x, i=i: x[i], cams) for i in range(a.frames)]
+            for name in names:
+                pipe = next(p for p in list_pipelines() if p.name == name)
+                cfg = make_config(name, width=w, height=h)
+                jobs[sname, name] = (scene, path, pool.submit(_compile_both, pipe, scene, path,
+                                                               cfg))
+        rows = []
+        for (sname, name), (scene, path, fut) in jobs.items():
+            try:
+                seq, one, seq_c, one_c = fut.result()
+                jax.block_until_ready(seq(scene, path))  # warm-up
+                jax.block_until_ready(one(scene, path[0]))
+                seq_pf, single = [], []
+                for _ in range(a.rounds):
+                    seq_pf.append(_time(seq, scene, path) / a.frames)
+                    single.append(statistics.mean(_time(one, scene, c) for c in path))
+                s, o = statistics.median(seq_pf), statistics.median(single)
+                rows.append({"scene": sname, "pipeline": name, "sequence_ms_per_frame": s,
+                             "single_ms": o, "ratio": s / o, "compile_seq_s": seq_c,
+                             "compile_single_s": one_c})
+            except Exception as e:  # noqa: BLE001 - a benchmark reports and goes on
+                rows.append({"scene": sname, "pipeline": name,
+                             "error": f"{type(e).__name__}: {e}"[:160]})
+            print(json.dumps(rows[-1]), flush=True)
+    print(f"\n{a.resolution}, {a.frames}-frame pan ({a.pixels_per_frame} px/frame), "
+          f"{a.rounds} rounds; {env['device']}, jax {env['jax']}, {env['date']}\n")
+    print_table(rows, ["scene", "pipeline", "sequence_ms_per_frame", "single_ms", "ratio",
+                       "compile_seq_s", "compile_single_s", "error"])
+    if a.json:
+        Path(a.json).write_text(json.dumps({"env": env, "rows": rows}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
