@@ -24,5 +24,9 @@ for s in "${studies[@]}"; do
   python3 -m jaxrender figures "runs/$s" >> "runs_$s.log" 2>&1
   tail -25 "runs_$s.log"
 done
-tar czf "$OUT/studies.tgz" runs runs_*.log
+# One archive per study (figures, tables, resolved study, environment, log): each stays under
+# the device tool's 16 MiB per file; the stores and image npz files stay on the machine.
+for s in "${studies[@]}"; do
+  tar czf "$OUT/$s.tgz" --exclude='*.npz' --exclude='results.jsonl' "runs/$s" "runs_$s.log"
+done
 ls -la "$OUT"

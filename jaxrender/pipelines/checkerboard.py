@@ -11,10 +11,10 @@ reconstructed and is shaded as well (counted).
 
 Reconstruction of a missing pixel, geometry-aware from a full-resolution visibility pass:
 
-- temporal (``temporal = true``, frames t >= 1 of a sequence): the pixel is reprojected into frame t-1
-  through the known camera motion (``metrics.reproject``) and the nearest pixel of the previous
-  output is taken, unless it is off screen, its depth disagrees (disocclusion) or its surface id
-  differs; then
+- temporal (``temporal = true``, frames t >= 1 of a sequence): the pixel is reprojected into
+  frame t-1 through the known camera motion (``metrics.reproject``) and, of the 2x2 pixels
+  around that point, the nearest one shaded in frame t-1 with the same surface id is taken,
+  unless the point is off screen or its depth disagrees (disocclusion); then
 - spatial: the mean of the 4 neighbours (all shaded this frame) that show the same surface id;
   when none does, the neighbour nearest in depth.
 
@@ -68,7 +68,8 @@ class CheckerboardConfig(PipelineConfig):
     false: the spatial-only variant.
     ids: surface id used for reconstruction and rejection (triangle, object, material, none).
     lod_bias: texture LOD bias (-1: one MIP level sharper). depth_tolerance: relative linear
-    depth difference at which history is rejected. wave_size: lanes per wave (counts only)."""
+    depth difference at which history is rejected (only with ``temporal``: a non-default value
+    with ``temporal = false`` is refused). wave_size: lanes per wave (counts only)."""
 
     pattern: str = "checker"
     frame: int = 0
@@ -85,13 +86,19 @@ class CheckerboardConfig(PipelineConfig):
         check_choice("wave_size", self.wave_size, (32, 64))
         if not float(self.depth_tolerance) > 0.0:
             raise ValueError(f"depth_tolerance must be > 0, got {self.depth_tolerance}")
+        # Nothing accepted and ignored: a setting that cannot act in this config is refused.
+        if not self.temporal and float(self.depth_tolerance) != type(self).depth_tolerance:
+            raise ValueError(f"depth_tolerance = {self.depth_tolerance} has no effect with "
+                             f"temporal = false (it rejects reprojected history, which only the "
+                             f"temporal variant reads)")
 
 
 class History(NamedTuple):
-    """What frame t keeps for frame t+1: its output, surface ids, depth and camera; ``valid``
-    False before the first frame."""
+    """What frame t keeps for frame t+1: its output, which of its pixels were shaded, surface
+    ids, depth and camera; ``valid`` False before the first frame."""
 
     image: Array
+    shaded: Array
     ids: Array
     depth: Array
     camera: Camera
@@ -118,6 +125,30 @@ def _spatial(img, ids, depth, ncov):
     best = jnp.argmin(dd, axis=-1)
     nearest = jnp.take_along_axis(jnp.stack(cs, axis=-2), best[..., None, None], axis=-2)[..., 0, :]
     return jnp.where(wsum > 0.0, avg, nearest)
+
+
+def _history_sample(prev: History, position: Array, ids: Array):
+    """The previous frame's sample nearest to each reprojected position among the 2x2 pixels
+    around it that were shaded in that frame (a checker holds two of them) and show the same
+    surface id: (colour float32[H, W, 3], found bool[H, W]). Only shaded samples are history:
+    a pixel that was itself reconstructed would feed each frame's resampling error into the
+    next, and the nearest pixel alone is unshaded half of the time."""
+    h, w = ids.shape
+    u, v = position[..., 0] - 0.5, position[..., 1] - 0.5
+    x0, y0 = jnp.floor(u).astype(jnp.int32), jnp.floor(v).astype(jnp.int32)
+    best_d = jnp.full((h, w), jnp.inf, jnp.float32)
+    colour = jnp.zeros((h, w, 3), jnp.float32)
+    for dy in (0, 1):
+        for dx in (0, 1):
+            x, y = x0 + dx, y0 + dy
+            inb = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+            xc, yc = jnp.clip(x, 0, w - 1), jnp.clip(y, 0, h - 1)
+            ok = inb & prev.shaded[yc, xc] & (prev.ids[yc, xc] == ids)
+            d = jnp.where(ok, (u - x) ** 2 + (v - y) ** 2, jnp.inf)
+            take = d < best_d
+            colour = jnp.where(take[..., None], prev.image[yc, xc], colour)
+            best_d = jnp.where(take, d, best_d)
+    return colour, prev.valid & jnp.isfinite(best_d)
 
 
 def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
@@ -158,11 +189,10 @@ def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
         if cfg.temporal:
             rp = reproject(vis.depth, camera, prev.camera, w, h, prev_depth=prev.depth,
                            depth_tolerance=cfg.depth_tolerance)
-            ix = jnp.clip(jnp.floor(rp.position[..., 0]), 0, w - 1).astype(jnp.int32)
-            iy = jnp.clip(jnp.floor(rp.position[..., 1]), 0, h - 1).astype(jnp.int32)
-            hist_ok = prev.valid & rp.valid & (prev.ids[iy, ix] == ids)
+            hist_colour, hist_ok = _history_sample(prev, rp.position, ids)
+            hist_ok = hist_ok & rp.valid
             use_hist = missing & hist_ok
-            recon = jnp.where(use_hist[..., None], prev.image[iy, ix], spatial)
+            recon = jnp.where(use_hist[..., None], hist_colour, spatial)
             rejected = missing & prev.valid & ~hist_ok
         else:
             use_hist = rejected = jnp.zeros((h, w), bool)
@@ -184,13 +214,14 @@ def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
             orphans_shaded=jnp.sum(orphan, dtype=jnp.int32),
             alpha_invocations=vis.counts["alpha_invocations"], overflow=vis.counts["overflow"])
     frame = Frame(image, counts, {"shaded": active, "history": use_hist})
-    return frame, History(image, ids, vis.depth, camera, jnp.asarray(True))
+    return frame, History(image, active, ids, vis.depth, camera, jnp.asarray(True))
 
 
 def empty_history(camera, cfg) -> History:
     h, w = cfg.height, cfg.width
-    return History(jnp.zeros((h, w, 3), jnp.float32), jnp.full((h, w), -1, jnp.int32),
-                   jnp.ones((h, w), jnp.float32), camera, jnp.asarray(False))
+    return History(jnp.zeros((h, w, 3), jnp.float32), jnp.zeros((h, w), bool),
+                   jnp.full((h, w), -1, jnp.int32), jnp.ones((h, w), jnp.float32), camera,
+                   jnp.asarray(False))
 
 
 def init(scene, static, camera, cfg: CheckerboardConfig) -> History:

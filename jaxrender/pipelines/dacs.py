@@ -44,7 +44,7 @@ from jaxrender.pipelines.dacs_levels import SPACINGS, level_map, level_pixels, p
 from jaxrender.pipelines.deferred import pack_gbuffer, unpack_gbuffer
 from jaxrender.pipelines.dispatch import compact, dispatch
 from jaxrender.pipelines.pixel_ids import ID_KINDS, LUMAS, SPACES, check_choice, luma, surface_ids
-from jaxrender.pipelines.registry import register_frame
+from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.shading import shade
 from jaxrender.types import Array, Frame
 
@@ -60,7 +60,9 @@ class DacsConfig(PipelineConfig):
     ``display`` (clamped, sRGB-encoded) or ``linear`` colour.
     warp_width, warp_batches: the simulated warp (32 or 64 lanes) and the groups of W pixels
     each warp searches per level. border: ``average`` or ``shade`` pixels that lack a complete
-    opposite pair of parents inside the image (see the module docstring)."""
+    opposite pair of parents inside the image (see the module docstring); when width - 1 and
+    height - 1 are multiples of the spacing every pixel has such a pair, and a non-default
+    border is refused."""
 
     threshold: float = 0.01
     spacing: int = 4
@@ -85,6 +87,14 @@ class DacsConfig(PipelineConfig):
         check_choice("warp_width", self.warp_width, dacs_warp.WARP_WIDTHS)
         if int(self.warp_batches) < 1:
             raise ValueError(f"warp_batches must be >= 1, got {self.warp_batches}")
+        # Nothing accepted and ignored: every pixel has a complete opposite pair of parents
+        # inside the image exactly when W - 1 and H - 1 are multiples of the spacing.
+        s = int(self.spacing)
+        if self.border != type(self).border and (self.width - 1) % s == 0 \
+                and (self.height - 1) % s == 0:
+            raise ValueError(f"border = {self.border!r} has no effect at {self.width}x"
+                             f"{self.height} with spacing {s}: every pixel has a complete "
+                             f"opposite pair of parents inside the image")
 
 
 def _parents(idx: np.ndarray, level: int, h: int, w: int, spacing: int):
@@ -191,7 +201,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
 
 
 @register_frame("dacs", DacsConfig)
-def render(scene, camera, cfg: DacsConfig) -> Frame:
+def frame(scene, camera, cfg: DacsConfig) -> Frame:
     """DACS: five (seven) levels per block, shade where parents differ, else interpolate."""
     with jax.named_scope("visibility"):
         vis = visibility(scene, camera, cfg)
@@ -219,3 +229,5 @@ def render(scene, camera, cfg: DacsConfig) -> Frame:
                          alpha_invocations=vis.counts["alpha_invocations"],
                          overflow=vis.counts["overflow"], **c)
     return Frame(image, counts, {"level": level, "shaded": shaded})
+
+render = REGISTRY["dacs"].render  # the compiled, overflow-checked entry

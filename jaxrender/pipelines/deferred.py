@@ -18,7 +18,7 @@ import jax.numpy as jnp
 
 from jaxrender.pipelines.base import (PipelineConfig, dispatch_points, make_counts,
                                       poison_on_overflow, visibility)
-from jaxrender.pipelines.registry import register_frame
+from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.shading import shade, surface_points
 from jaxrender.shading.vec import safe_normalize
@@ -34,8 +34,9 @@ DEPTH_BYTES = 4  # the depth buffer (D32F) written by the same pass
 @dataclass(frozen=True)
 class DeferredConfig(PipelineConfig):
     """msaa: 1, 2, 4 or 8 samples; per_sample_shading: under MSAA, also shade the samples whose
-    surface (triangle) differs from the pixel's representative sample. wave_size: lanes per
-    wave of the lighting pass (8x8 tiles split into waves; a wave runs if any pixel is covered).
+    surface (triangle) differs from the pixel's representative sample (refused with msaa = 1,
+    where there is one sample per pixel and it would do nothing). wave_size: lanes per wave of
+    the lighting pass (8x8 tiles split into waves; a wave runs if any pixel is covered).
     """
 
     msaa: int = 1
@@ -48,6 +49,10 @@ class DeferredConfig(PipelineConfig):
             raise ValueError(f"msaa must be 1, 2, 4 or 8, got {self.msaa}")
         if self.wave_size not in (32, 64):
             raise ValueError(f"wave_size must be 32 or 64, got {self.wave_size}")
+        # Nothing accepted and ignored: a setting that cannot act in this config is refused.
+        if self.per_sample_shading and self.msaa == 1:
+            raise ValueError("per_sample_shading = true has no effect with msaa = 1 (one sample "
+                             "per pixel, nothing to shade per sample); set msaa to 2, 4 or 8")
 
 
 def pack_gbuffer(pts: SurfacePoints):
@@ -73,7 +78,7 @@ def unpack_gbuffer(rows, camera, live) -> SurfacePoints:
 
 
 @register_frame("deferred", DeferredConfig)
-def render(scene, camera, cfg: DeferredConfig) -> Frame:
+def frame(scene, camera, cfg: DeferredConfig) -> Frame:
     """Deferred shading: G-buffer pass, then one shade per covered pixel (bytes counted)."""
     w, h = cfg.width, cfg.height
     n_pix = w * h
@@ -137,6 +142,7 @@ def render(scene, camera, cfg: DeferredConfig) -> Frame:
             overflow=vis.counts["overflow"])
     return Frame(image, counts, {"shade_count": jnp.sum(act, axis=0, dtype=jnp.int32).reshape(h, w)})
 
+render = REGISTRY["deferred"].render  # the compiled, overflow-checked entry
 
 def tile_waves(active, wave_size: int, invocations):
     """Waves of a full-screen compute pass over 8x8 tiles: each tile is split into

@@ -25,7 +25,7 @@ from jaxrender.pipelines.base import (PipelineConfig, clip_vertices, dispatch_po
 from jaxrender.pipelines.dispatch import dispatch_lanes
 from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of_segment_index,
                                        quad_list, segment_starts)
-from jaxrender.pipelines.registry import register_frame
+from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.shading import alpha_test, shade
 from jaxrender.sorting import lex_sort
@@ -56,7 +56,7 @@ class ForwardConfig(PipelineConfig):
 
 
 @register_frame("forward", ForwardConfig)
-def render(scene, camera, cfg: ForwardConfig) -> Frame:
+def frame(scene, camera, cfg: ForwardConfig) -> Frame:
     """Forward shading in submission order (overdraw, 2x2 quads, optional Z pre-pass, MSAA)."""
     w, h = cfg.width, cfg.height
     n_pix, cap = w * h, cfg.capacity
@@ -177,6 +177,7 @@ def render(scene, camera, cfg: ForwardConfig) -> Frame:
     aux = {"shade_count": per_pixel.reshape(h, w)}
     return Frame(image, counts, aux)
 
+render = REGISTRY["forward"].render  # the compiled, overflow-checked entry
 
 def _helper_lane_fn(scene, camera, clip, cfg, ql, n_frag):
     """Lane ``4 q + k`` is pixel k of quad q; it writes the colour of its unit if the unit is

@@ -42,7 +42,9 @@ class ObjectSpaceConfig(PipelineConfig):
     taps along the footprint's major axis (1 = isotropic). eps: barycentric clamp
     [-eps, 1 + eps] for shadels outside their owner triangle (Oxide: 1). sheet_resolution:
     level-0 shadels per side for every object (0 = per object from texel_density in shadels per
-    world unit and the materials' texture/stripe resolution, capped at max_sheet_resolution).
+    world unit and the materials' texture/stripe resolution, capped at max_sheet_resolution;
+    with sheet_resolution > 0 a non-default texel_density or max_sheet_resolution, and a
+    sheet_resolution above max_sheet_resolution, are refused: they would be ignored or cap it).
     xatlas_resolution, force_xatlas: chart generation. shade_every, reuse: temporal decoupling
     in sequences. wave_size: lanes per wave for the wave counts (a chunk is 64 lanes).
     """
@@ -76,6 +78,25 @@ class ObjectSpaceConfig(PipelineConfig):
         for k, ok in checks.items():
             if not ok:
                 raise ValueError(f"object_space: invalid {k} = {getattr(self, k)!r}")
+        # Nothing accepted and ignored: an explicit sheet_resolution replaces the per-object
+        # sizing (texel_density); max_sheet_resolution then only caps it.
+        if self.sheet_resolution > 0:
+            cls = type(self)
+            why = (f"with sheet_resolution = {self.sheet_resolution} > 0 (it sizes the sheets "
+                   f"when sheet_resolution = 0)")
+            if self.texel_density != cls.texel_density:
+                raise ValueError(f"object_space: texel_density = {self.texel_density!r} has no "
+                                 f"effect {why}")
+            if self.sheet_resolution > self.max_sheet_resolution:
+                raise ValueError(f"object_space: sheet_resolution = {self.sheet_resolution} "
+                                 f"exceeds max_sheet_resolution = {self.max_sheet_resolution} "
+                                 f"and would be capped to it")
+            if self.max_sheet_resolution != cls.max_sheet_resolution \
+                    and self.sheet_resolution <= cls.max_sheet_resolution:
+                raise ValueError(f"object_space: max_sheet_resolution = "
+                                 f"{self.max_sheet_resolution!r} has no effect {why}, unless "
+                                 f"it lifts the cap for a sheet_resolution above "
+                                 f"{cls.max_sheet_resolution}")
 
     def overflow_hint(self) -> str:
         return (f"the marked chunks do not fit the store even at the largest MIP bias (or "

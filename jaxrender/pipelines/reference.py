@@ -28,7 +28,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.pipelines.dispatch import shade_pixels
-from jaxrender.pipelines.registry import RenderConfig, register_frame
+from jaxrender.pipelines.registry import REGISTRY, RenderConfig, register_frame
 from jaxrender.raster.coverage import EMPTY_KEY, depth_key
 from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
 from jaxrender.raster.resolve import barycentrics_at, resolve
@@ -181,7 +181,7 @@ def ldr_psnr(a: Array, b: Array) -> Array:
 
 @register_frame("reference", ReferenceConfig,
                 "ground truth: k x k stratified samples per pixel, each shaded, box filter")
-def render(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> Frame:
+def frame(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> Frame:
     """Ground truth: k x k stratified samples per pixel, each shaded, box filter.
 
     k is a traced config field, so changing k or moving the camera never recompiles. With
@@ -196,6 +196,7 @@ def render(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> Frame:
                                            convergence_psnr=ldr_psnr(frame.image, fine.image)))
     return frame
 
+render = REGISTRY["reference"].render  # the compiled, overflow-checked entry
 
 def convergence_psnr(scene: Scene, camera: Camera, cfg: ReferenceConfig) -> float:
     """LDR PSNR (dB) between the reference at k and at 2k samples per pixel side: how far the

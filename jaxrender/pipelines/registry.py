@@ -10,6 +10,7 @@ A pipeline is three functions over its static config (DESIGN.md, "The data flow"
 
 ``@register("name", ConfigClass, init=..., prepare=...)`` registers a ``step``;
 ``@register_frame("name", ConfigClass)`` registers a stateless ``frame(scene, camera, cfg)``.
+Both return the function unchanged; a module exposes ``render = REGISTRY["name"].render``.
 From these the registry's ``Pipeline`` builds ``render(scene, camera, cfg) -> Frame`` (one step
 from ``init``) and ``render_sequence(scene, cameras, cfg) -> Frame`` (a ``lax.scan`` of
 ``step``), both through ``pipelines.program``: one jit site and one overflow check for all.
@@ -124,13 +125,14 @@ class FrameStep:
 
 def register_frame(name: str, config_cls: type, description: str = "", *,
                    replace: bool = False):
-    """Register a stateless pipeline's ``frame(scene, camera, cfg) -> Frame``. Returns the
-    registered pipeline's ``render`` (the compiled, overflow-checked entry)."""
+    """Register a stateless pipeline's ``frame(scene, camera, cfg) -> Frame``; returns
+    ``frame`` unchanged (it must stay reachable under its own name: worker processes receive
+    it pickled by reference)."""
 
     def wrap(frame: Callable) -> Callable:
         doc = description or ((frame.__doc__ or "").strip().splitlines() or [""])[0]
         register(name, config_cls, doc, replace=replace)(FrameStep(frame))
-        return REGISTRY[name].render
+        return frame
 
     return wrap
 

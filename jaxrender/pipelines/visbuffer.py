@@ -21,7 +21,7 @@ import numpy as np
 from jaxrender.pipelines.base import (PipelineConfig, clip_vertices, dispatch, make_counts,
                                       points_at, poison_on_overflow, visibility)
 from jaxrender.pipelines.quads import BIG, first_of_segment_index, segment_starts
-from jaxrender.pipelines.registry import register_frame
+from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.scene.camera import world_to_clip
 from jaxrender.shading import shade
 from jaxrender.sorting import lex_sort
@@ -99,7 +99,9 @@ class VisBufferConfig(PipelineConfig):
     of ``fixed`` (1x1, 1x2, 2x1, 2x2). vrs_thresholds (a, b): for ``distance`` (world units from
     the eye to the triangle's centroid) and ``speed`` (screen pixels per frame of the centroid,
     from scene.velocity): below a 1x1, from a to b 2x1 (1x2 for mostly vertical motion), from b
-    2x2. rate_image: rows of rate names stretched over the screen (nearest cell)."""
+    2x2. rate_image: rows of rate names stretched over the screen (nearest cell). Each VRS
+    setting is refused away from its mode (vrs_rate unless ``fixed``, vrs_thresholds unless
+    ``distance`` or ``speed``, rate_image unless ``image``) when it differs from its default."""
 
     batch_bits: int = 16
     primitive_bits: int = 7
@@ -131,6 +133,17 @@ class VisBufferConfig(PipelineConfig):
             bad = sorted({r for row in self.rate_image for r in row} - set(RATES))
             if bad:
                 raise ValueError(f"rate_image: unknown rate {bad[0]!r}; rates: {', '.join(RATES)}")
+        # Nothing accepted and ignored: a VRS setting of another mode than ``vrs`` is refused.
+        cls = type(self)
+        if self.vrs != "fixed" and self.vrs_rate != cls.vrs_rate:
+            raise ValueError(f"vrs_rate = {self.vrs_rate!r} has no effect with vrs = {self.vrs!r}"
+                             f" (it is the rate of vrs = 'fixed')")
+        if self.vrs not in ("distance", "speed") and self.vrs_thresholds != cls.vrs_thresholds:
+            raise ValueError(f"vrs_thresholds = {self.vrs_thresholds} have no effect with vrs = "
+                             f"{self.vrs!r} (they apply to vrs = 'distance' and 'speed')")
+        if self.vrs != "image" and self.rate_image:
+            raise ValueError(f"rate_image has no effect with vrs = {self.vrs!r} (it is the rate "
+                             f"map of vrs = 'image')")
 
     @property
     def layout(self) -> IdLayout:
@@ -202,7 +215,7 @@ def pixel_rates(scene, camera, cfg, tri) -> jax.Array:
 
 
 @register_frame("visbuffer", VisBufferConfig)
-def render(scene, camera, cfg: VisBufferConfig) -> Frame:
+def frame(scene, camera, cfg: VisBufferConfig) -> Frame:
     """Visibility buffer: packed 32-bit ids, shading from the id in material tiles/waves, VRS."""
     w, h = cfg.width, cfg.height
     n_pix = w * h
@@ -274,3 +287,5 @@ def render(scene, camera, cfg: VisBufferConfig) -> Frame:
     aux = {"ids": ids, "rate": rate.reshape(h, w),
            "shade_count": is_anchor.astype(jnp.int32).reshape(h, w)}
     return Frame(image, counts, aux)
+
+render = REGISTRY["visbuffer"].render  # the compiled, overflow-checked entry

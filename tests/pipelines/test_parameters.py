@@ -1,0 +1,332 @@
+"""Nothing accepted and ignored: every config field of every built-in pipeline either changes
+the output or is declared ``OUTPUT_NEUTRAL`` and leaves it bit-identical.
+
+``CASES`` gives, per pipeline and field (every dataclass field but width and height), an input
+on which changing that field alone changes the image, a count or an aux array: a scene, the
+base parameters that make the field matter (``per_sample_shading`` needs MSAA, ``vrs_rate``
+needs ``vrs = "fixed"``, ...), the changed value, and whether the frames are a camera path
+(state carried). A test checks that the table covers exactly each registered built-in
+pipeline's fields, so a new field without a case fails, naming it. ``NEUTRAL_VALUES`` gives a
+changed value for every OUTPUT_NEUTRAL field; those must leave every output bit-identical.
+
+A field that has no effect in some configuration of the *other* fields is refused there by its
+config's ``__post_init__`` (``REFUSED``); a field whose effect depends on the scene (a MIP bias
+step without a full store, xatlas settings for meshes with their own unique UVs) is not.
+
+Cost: every distinct config is one compiled program (the rasterizer alone is seconds of XLA on
+a CPU), so the frames are tiny, one small scene serves (almost) every case, the stateful
+pipelines run every case as one 3-frame pan (one base program), and each rendered outcome is
+cached and shared between the cases that need it (a contextual base is often another case's
+changed config).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import Any, NamedTuple
+
+import numpy as np
+import pytest
+
+from jaxrender.pipelines import PipelineOverflow, get_pipeline, list_pipelines, make_config
+from jaxrender.scene import load_scene
+from jaxrender.scene.camera_path import pan
+
+W, H = 24, 16
+FRAMES = 3  # a pan of this many frames for the stateful pipelines (history, store)
+PAN_PIXELS = 2.0  # per frame
+# An image change at or below float32 shading noise is not an effect of a field (a different
+# but equivalent code path); counts and aux arrays must differ exactly.
+IMAGE_NOISE = 1e-4
+
+# Leaf cards: alpha-tested (the fragment lists and the alpha-test dispatch run, so chunk and
+# fragment_capacity are exercised), textured (LOD settings act), back faces in view (culling
+# acts), several objects and two triangles per card (id kinds act), overdraw (Z pre-pass acts).
+SCENES = {
+    "foliage": ("foliage", {"n_cards": 12, "card_size": 0.8}),
+}
+
+
+class Case(NamedTuple):
+    """Render ``scene`` with ``base`` and with ``base`` plus {field: changed}."""
+
+    scene: str
+    base: dict
+    changed: Any
+    sequence: bool = False
+
+
+F = "foliage"
+SEQ = {"sequence": True}
+
+CASES: dict[str, dict[str, Case]] = {
+    "reference": {
+        "k": Case(F, {}, 2),
+        "convergence": Case(F, {}, True),  # adds counts["convergence_psnr"]
+    },
+    "forward": {
+        "cull_backfaces": Case(F, {}, True),
+        "z_prepass": Case(F, {}, True),
+        "msaa": Case(F, {}, 4),
+        "shade_helpers": Case(F, {}, True),
+        "wave_size": Case(F, {}, 64),
+    },
+    "deferred": {
+        "cull_backfaces": Case(F, {}, True),
+        "msaa": Case(F, {}, 4),
+        "per_sample_shading": Case(F, {"msaa": 4}, True),
+        "wave_size": Case(F, {}, 64),
+    },
+    "visbuffer": {
+        "cull_backfaces": Case(F, {}, True),
+        # The batch / primitive split only moves where an id overflows: with both at 0 bits the
+        # second triangle of a card does not fit (the frame is refused, PipelineOverflow).
+        "batch_bits": Case(F, {"primitive_bits": 0}, 0),
+        "primitive_bits": Case(F, {"batch_bits": 0}, 0),
+        "instance_bits": Case(F, {}, 8),  # the packed ids (aux) move
+        "wave_size": Case(F, {}, 64),
+        "vrs": Case(F, {}, "fixed"),
+        "vrs_rate": Case(F, {"vrs": "fixed"}, "1x2"),
+        "vrs_thresholds": Case(F, {"vrs": "distance"}, (3.0, 5.0)),
+        "rate_image": Case(F, {"vrs": "image", "rate_image": (("1x1",),)},
+                           (("2x2", "1x1"), ("1x2", "2x1"))),
+    },
+    "dacs": {
+        "cull_backfaces": Case(F, {}, True),
+        "threshold": Case(F, {}, 0.0),
+        "spacing": Case(F, {}, 8),
+        "ids": Case(F, {}, "triangle"),
+        "luma": Case(F, {}, "rec709"),
+        "variance_space": Case(F, {}, "linear"),
+        "warp_width": Case(F, {}, 64),
+        "warp_batches": Case(F, {}, 1),
+        "border": Case(F, {}, "shade"),  # 24x16: the last row and column lack a pair
+    },
+    "checkerboard": {
+        "cull_backfaces": Case(F, {}, True, **SEQ),
+        "pattern": Case(F, {}, "2x1", **SEQ),
+        "frame": Case(F, {}, 1, **SEQ),
+        "temporal": Case(F, {}, False, **SEQ),
+        "ids": Case(F, {}, "triangle", **SEQ),
+        "lod_bias": Case(F, {}, -1.0, **SEQ),
+        "depth_tolerance": Case(F, {}, 1e-5, **SEQ),
+        "wave_size": Case(F, {}, 64, **SEQ),
+    },
+    "object_space": {
+        "cull_backfaces": Case(F, {}, True, **SEQ),
+        "store_shadels": Case(F, {}, 20 * 64, **SEQ),
+        "mip_bias": Case(F, {}, 1.0, **SEQ),
+        # A store too small for the marked chunks: the bias is raised in these steps.
+        "bias_step": Case(F, {"store_shadels": 20 * 64}, 1.0, **SEQ),
+        "filter": Case(F, {}, "bilinear", **SEQ),
+        "aniso_taps": Case(F, {}, 4, **SEQ),
+        "eps": Case(F, {}, 0.0, **SEQ),
+        "sheet_resolution": Case(F, {}, 16, **SEQ),
+        "texel_density": Case(F, {}, 16.0, **SEQ),  # the ground (untextured) is sized by it
+        "max_sheet_resolution": Case(F, {}, 16, **SEQ),
+        # Charts of meshes with unique own UVs come from xatlas only when forced.
+        "xatlas_resolution": Case(F, {"force_xatlas": True}, 64, **SEQ),
+        "force_xatlas": Case(F, {}, True, **SEQ),
+        "shade_every": Case(F, {}, 2, **SEQ),
+        "reuse": Case(F, {}, False, **SEQ),
+        "wave_size": Case(F, {}, 64, **SEQ),
+    },
+}
+
+# A changed value for every OUTPUT_NEUTRAL field (chunks of 64 lanes: several per work list).
+NEUTRAL_VALUES = {"chunk": 64, "fragment_capacity": 8 * W * H}
+# The input of each pipeline's neutrality check: its cases' scene, and a path if stateful.
+NEUTRAL_INPUT = {p: (F, get_pipeline(p).stateful) for p in CASES}
+
+# (pipeline, params, field): a field set where the other fields leave it nothing to do; its
+# config must refuse it, naming it.
+REFUSED = [
+    ("deferred", {"per_sample_shading": True}, "per_sample_shading"),
+    ("visbuffer", {"vrs_rate": "1x2"}, "vrs_rate"),
+    ("visbuffer", {"vrs": "distance", "vrs_rate": "1x1"}, "vrs_rate"),
+    ("visbuffer", {"vrs_thresholds": (1.0, 2.0)}, "vrs_thresholds"),
+    ("visbuffer", {"vrs": "fixed", "vrs_thresholds": (1.0, 2.0)}, "vrs_thresholds"),
+    ("visbuffer", {"rate_image": (("2x2",),)}, "rate_image"),
+    ("visbuffer", {"vrs": "speed", "rate_image": (("2x2",),)}, "rate_image"),
+    ("dacs", {"width": 33, "height": 21, "border": "shade"}, "border"),
+    ("dacs", {"width": 33, "height": 17, "spacing": 8, "border": "shade"}, "border"),
+    ("checkerboard", {"temporal": False, "depth_tolerance": 0.05}, "depth_tolerance"),
+    ("object_space", {"sheet_resolution": 64, "texel_density": 32.0}, "texel_density"),
+    ("object_space", {"sheet_resolution": 64, "max_sheet_resolution": 1024},
+     "max_sheet_resolution"),
+    ("object_space", {"sheet_resolution": 8192}, "sheet_resolution"),
+]
+
+# Their neighbours that must stay valid: the same settings where they act, and the defaults
+# given explicitly where they do not.
+ACCEPTED = [
+    ("deferred", {"per_sample_shading": True, "msaa": 2}),
+    ("deferred", {"per_sample_shading": False, "msaa": 1}),
+    ("visbuffer", {"vrs": "fixed", "vrs_rate": "1x2"}),
+    ("visbuffer", {"vrs": "off", "vrs_rate": "2x2", "vrs_thresholds": (8, 20), "rate_image": ()}),
+    ("visbuffer", {"vrs": "speed", "vrs_thresholds": (1.0, 2.0)}),
+    ("visbuffer", {"vrs": "image", "rate_image": (("2x2",),)}),
+    ("dacs", {"width": 32, "height": 21, "border": "shade"}),
+    ("dacs", {"width": 33, "height": 21, "border": "average"}),
+    ("checkerboard", {"temporal": True, "depth_tolerance": 0.05}),
+    ("checkerboard", {"temporal": False, "depth_tolerance": 0.01}),
+    ("object_space", {"sheet_resolution": 0, "texel_density": 32.0, "max_sheet_resolution": 1024}),
+    ("object_space", {"sheet_resolution": 64, "texel_density": 128.0}),
+    ("object_space", {"sheet_resolution": 8192, "max_sheet_resolution": 8192}),
+]
+
+
+# ---------------------------------------------------------------- rendering, cached
+
+
+def _builtin_pipelines():
+    """The pipelines registered by jaxrender's own modules (tests may register fakes)."""
+    return {p.name: p for p in list_pipelines()
+            if p.config_cls.__module__.startswith("jaxrender.pipelines.")}
+
+
+def _fields(pipe) -> set[str]:
+    return {f.name for f in dataclasses.fields(pipe.config_cls)} - {"width", "height"}
+
+
+@functools.lru_cache(maxsize=None)
+def _scene(key: str):
+    name, params = SCENES[key]
+    return load_scene(name, **params)
+
+
+@functools.lru_cache(maxsize=None)
+def _path(key: str):
+    return pan(_scene(key).camera, FRAMES, PAN_PIXELS, H)
+
+
+@functools.lru_cache(maxsize=None)
+def _outcome(pipeline: str, scene: str, params: tuple, sequence: bool) -> dict:
+    """{name: numpy array} of the image, every count and every aux array (a sequence: stacked
+    over its frames), or {"raised": message} when the frame is refused for an overflow."""
+    pipe = get_pipeline(pipeline)
+    cfg = make_config(pipeline, width=W, height=H, **dict(params))
+    sc = _scene(scene)
+    try:
+        frame = (pipe.render_sequence(sc, _path(scene), cfg) if sequence
+                 else pipe.render(sc, sc.camera, cfg))
+    except PipelineOverflow as e:
+        return {"raised": np.asarray(str(e))}
+    out = {"image": np.asarray(frame.image)}
+    out.update({f"counts[{k!r}]": np.asarray(v) for k, v in (frame.counts or {}).items()})
+    out.update({f"aux[{k!r}]": np.asarray(v) for k, v in (frame.aux or {}).items()})
+    return out
+
+
+def render(pipeline: str, scene: str, params: dict, sequence: bool) -> dict:
+    return _outcome(pipeline, scene, tuple(sorted(params.items())), sequence)
+
+
+def differences(a: dict, b: dict, image_noise: float = 0.0) -> list[str]:
+    """The outputs that differ between two outcomes (an image only beyond ``image_noise``)."""
+    diff = sorted(set(a) ^ set(b))
+    for k in sorted(set(a) & set(b)):
+        x, y = a[k], b[k]
+        if x.shape != y.shape or x.dtype != y.dtype:
+            diff.append(k)
+        elif k == "image" and image_noise > 0.0:
+            d = np.abs(x.astype(np.float64) - y.astype(np.float64))
+            if np.any(np.isnan(x) != np.isnan(y)) or np.nanmax(d, initial=0.0) > image_noise:
+                diff.append(k)
+        elif not np.array_equal(x, y, equal_nan=x.dtype.kind == "f"):
+            diff.append(k)
+    return diff
+
+
+# ---------------------------------------------------------------- the table is complete
+
+
+def test_cases_cover_every_field_of_every_builtin_pipeline():
+    pipes = _builtin_pipelines()
+    assert sorted(CASES) == sorted(pipes), (
+        f"CASES has pipelines {sorted(CASES)}, the registry {sorted(pipes)}: give every "
+        f"registered pipeline a table of cases")
+    for name, pipe in pipes.items():
+        neutral = set(pipe.config_cls.OUTPUT_NEUTRAL)
+        want = _fields(pipe) - neutral
+        have = set(CASES[name])
+        assert not have - want, (
+            f"{name}: CASES has {sorted(have - want)}, not a field of its config"
+            + (f" (or declared OUTPUT_NEUTRAL: {sorted(have & neutral)})" if have & neutral else ""))
+        assert not want - have, (
+            f"{name}: field(s) {sorted(want - have)} have no case in CASES: add an input on "
+            f"which changing it changes the output, or declare it OUTPUT_NEUTRAL")
+        missing = sorted(neutral - set(NEUTRAL_VALUES))
+        assert not missing, f"{name}: OUTPUT_NEUTRAL field(s) {missing} have no NEUTRAL_VALUES"
+        for field, case in CASES[name].items():
+            defaults = {f.name: f.default for f in dataclasses.fields(pipe.config_cls)}
+            assert case.changed != case.base.get(field, defaults[field]), (
+                f"{name}.{field}: the changed value {case.changed!r} is the base value")
+
+
+# ---------------------------------------------------------------- each field acts
+
+
+FIELD_CASES = [(p, f) for p in CASES for f in CASES[p]]
+
+
+@pytest.mark.parametrize("pipeline,field", FIELD_CASES, ids=[f"{p}-{f}" for p, f in FIELD_CASES])
+def test_field_changes_the_output(pipeline, field):
+    case = CASES[pipeline][field]
+    base = render(pipeline, case.scene, case.base, case.sequence)
+    changed = render(pipeline, case.scene, {**case.base, field: case.changed}, case.sequence)
+    diff = differences(base, changed, IMAGE_NOISE)
+    assert diff, (
+        f"{pipeline}.{field} = {case.changed!r} (base {case.base or 'defaults'}, scene "
+        f"{case.scene}, {'a %d-frame pan' % FRAMES if case.sequence else 'one frame'}) changed "
+        f"no output: {sorted(base)} are all identical (the image within {IMAGE_NOISE})")
+
+
+NEUTRAL_CASES = [(p, f) for p in CASES
+                 for f in get_pipeline(p).config_cls.OUTPUT_NEUTRAL]
+
+
+@pytest.mark.parametrize("pipeline,field", NEUTRAL_CASES,
+                         ids=[f"{p}-{f}" for p, f in NEUTRAL_CASES])
+def test_output_neutral_field_leaves_the_output_bit_identical(pipeline, field):
+    scene, sequence = NEUTRAL_INPUT[pipeline]
+    base = render(pipeline, scene, {}, sequence)
+    changed = render(pipeline, scene, {field: NEUTRAL_VALUES[field]}, sequence)
+    assert "raised" not in base, f"{pipeline}: the neutrality input overflowed: {base['raised']}"
+    assert sorted(base) == sorted(changed), (
+        f"{pipeline}.{field} = {NEUTRAL_VALUES[field]!r} (OUTPUT_NEUTRAL) changed the outputs "
+        f"present: {sorted(set(base) ^ set(changed))}")
+    for k in base:
+        np.testing.assert_array_equal(
+            changed[k], base[k],
+            err_msg=f"{pipeline}.{field} = {NEUTRAL_VALUES[field]!r} is declared OUTPUT_NEUTRAL "
+                    f"but changed {k}")
+
+
+# ---------------------------------------------------------------- refused where it cannot act
+
+
+@pytest.mark.parametrize("pipeline,params,field", REFUSED,
+                         ids=[f"{p}-{f}-{i}" for i, (p, _, f) in enumerate(REFUSED)])
+def test_field_without_effect_in_its_config_is_refused(pipeline, params, field):
+    with pytest.raises(ValueError, match=field) as info:
+        make_config(pipeline, **params)
+    assert "no effect" in str(info.value) or "capped" in str(info.value), (
+        f"{pipeline} {params}: the refusal of {field} does not say why: {info.value}")
+
+
+@pytest.mark.parametrize("pipeline,params", ACCEPTED,
+                         ids=[f"{p}-{i}" for i, (p, _) in enumerate(ACCEPTED)])
+def test_neighbours_of_a_refusal_stay_valid(pipeline, params):
+    cfg = make_config(pipeline, **params)
+    for k, v in params.items():
+        got = getattr(cfg, k)
+        assert got == v or (isinstance(v, tuple) and tuple(got) == tuple(map(float, v))), (
+            f"{pipeline}: {k} = {v!r} was accepted as {got!r}")
+
+
+def test_default_configs_are_valid():
+    for name, pipe in _builtin_pipelines().items():
+        cfg = make_config(name)
+        assert isinstance(cfg, pipe.config_cls), f"{name}: make_config gave {type(cfg)}"
