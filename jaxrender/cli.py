@@ -61,9 +61,12 @@ def cmd_validate(a) -> int:
     from jaxrender.study.schema import load_study
 
     s = load_study(a.file)
-    frames = sum(p.frames for p in s.paths) * len(s.scenes) * len(s.variants)
+    per_variant = sum(p.frames for p in s.paths) * len(s.scenes)
+    frames = per_variant * len(s.variants)
+    warm = s.warmup_frames * len(s.paths) * len(s.scenes) * len(s.variants)
+    extra = f", plus {warm} warm-up frames" if warm else ""
     print(f"{a.file}: ok ({len(s.scenes)} scene(s), {len(s.paths)} path(s), "
-          f"{len(s.variants)} variant(s), {frames} frames to render)")
+          f"{len(s.variants)} variant(s), {frames} frames to render{extra})")
     return 0
 
 
@@ -265,6 +268,9 @@ def main(argv=None) -> int:
     except (UserError, StudyError) as e:
         print(f"jaxrender: error: {e}", file=sys.stderr)
         return 2
+    except OverflowError as e:  # pipelines.PipelineOverflow: names the pipeline and the fix
+        print(f"jaxrender: error: {e}", file=sys.stderr)
+        return 3
     except KeyboardInterrupt:
         print("jaxrender: interrupted; rerun the same command to resume", file=sys.stderr)
         return 130

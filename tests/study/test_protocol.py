@@ -86,3 +86,56 @@ def test_new_pipelines_run_through_the_study_command(fake, monkeypatch, capsys):
     assert gains[0.25]["rmse"] != gains[0.75]["rmse"]
     assert np.isfinite([r["time_ms"] for r in rows]).all()
     assert all(r["time_ms_single"] > 0 for r in rows)
+
+
+@dataclass(frozen=True)
+class CapConfig(registry.RenderConfig):
+    capacity: int = 100
+
+    def overflow_hint(self) -> str:
+        return f"raise capacity (now {self.capacity})"
+
+
+def capped_step(scene, static, state, camera, t, cfg):
+    """test: overflows when its capacity is below the pixel count"""
+    need = cfg.width * cfg.height
+    frame = Frame(_image(scene, camera, cfg, 1.0),
+                  {"overflow": jnp.int32(max(0, need - cfg.capacity))}, {})
+    return frame, state
+
+
+def test_one_overflow_error_everywhere(fake, monkeypatch, capsys):
+    import pytest
+
+    from jaxrender.pipelines import PipelineOverflow
+    from jaxrender.study import testing
+
+    pipe = registry.Pipeline("capped_test", CapConfig, capped_step)
+    monkeypatch.setitem(registry.REGISTRY, "capped_test", pipe)
+    scene = testing.FakeScene(jnp.ones(3), "tiny")
+    cams = testing.fake_cameras(scene, type("P", (), {"type": "static", "params": (),
+                                                      "frames": 2})(), 24, 16)
+    small = CapConfig(width=24, height=16, capacity=10)
+    with pytest.raises(PipelineOverflow, match=r"capped_test: .*raise capacity \(now 10\)"):
+        pipe.render(scene, cams[0], small)
+    with pytest.raises(PipelineOverflow, match=r"in frame\(s\) \[0, 1\]"):
+        pipe.render_sequence(scene, cams, small)
+    assert pipe.render(scene, cams[0], CapConfig(width=24, height=16, capacity=384)).image.shape \
+        == (16, 24, 3)
+    f = fake / "studies" / "capped.toml"
+    f.parent.mkdir(exist_ok=True)
+    f.write_text(textwrap.dedent(STUDY).split("[[pipelines]]")[0]
+                 + '[[pipelines]]\ntype = "capped_test"\nparams = { capacity = 10 }\n')
+    assert cli.main(["study", str(f), "--out", str(fake / "capped"), "--no-progress",
+                     "--no-figures"]) == 3
+    err = capsys.readouterr().err
+    assert "scene 'tiny', path 'slowpan', pipeline 'capped_test'" in err and "now 10" in err
+    assert store.read_rows(fake / "capped" / "results.jsonl") == []  # nothing half-written
+
+
+def test_registered_pipelines_pickle_by_reference():
+    """The study's compile workers receive pipelines pickled: every built-in must survive it."""
+    import pickle
+
+    for pipe in registry.list_pipelines():
+        assert pickle.loads(pickle.dumps(pipe)) == pipe, pipe.name
