@@ -144,7 +144,8 @@ def _history_sample(prev: History, position: Array, ids: Array):
             inb = (x >= 0) & (x < w) & (y >= 0) & (y < h)
             xc, yc = jnp.clip(x, 0, w - 1), jnp.clip(y, 0, h - 1)
             ok = inb & prev.shaded[yc, xc] & (prev.ids[yc, xc] == ids)
-            d = jnp.where(ok, (u - x) ** 2 + (v - y) ** 2, jnp.inf)
+            d = jnp.where(ok, (u - x.astype(jnp.float32)) ** 2 + (v - y.astype(jnp.float32)) ** 2,
+                          jnp.inf)
             take = d < best_d
             colour = jnp.where(take[..., None], prev.image[yc, xc], colour)
             best_d = jnp.where(take, d, best_d)
