@@ -62,7 +62,8 @@ class DacsConfig(PipelineConfig):
     each warp searches per level. border: ``average`` or ``shade`` pixels that lack a complete
     opposite pair of parents inside the image (see the module docstring); when width - 1 and
     height - 1 are multiples of the spacing every pixel has such a pair, and a non-default
-    border is refused."""
+    border is refused. chunk (see PipelineConfig) is not output-neutral here: the counts
+    ``dispatch_lanes`` (chunks x chunk launched) and ``dispatch_chunks`` are read off it."""
 
     threshold: float = 0.01
     spacing: int = 4
@@ -74,6 +75,8 @@ class DacsConfig(PipelineConfig):
     border: str = "average"
 
     TRACED_FIELDS: ClassVar[tuple[str, ...]] = ("threshold",)
+    # Not ``chunk``: counts["dispatch_lanes"] (chunks x chunk launched) depends on it.
+    OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ("fragment_capacity",)
 
     def __post_init__(self):
         super().__post_init__()

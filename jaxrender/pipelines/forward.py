@@ -39,8 +39,9 @@ class ForwardConfig(PipelineConfig):
     """z_prepass: depth pre-pass then depth-equal shading. msaa: 1, 2, 4 or 8 samples (D3D
     standard positions). shade_helpers: run the shader on quad helper lanes too, as hardware
     does for derivatives (the image is unchanged: derivatives here are analytic; only the work
-    grows). wave_size: lanes per wave (32 or 64) for the wave counts (quads of one material are
-    packed into waves)."""
+    grows, as ``counts["shader_evaluations"]`` shows: the live lanes the shader ran on).
+    wave_size: lanes per wave (32 or 64) for the wave counts (quads of one material are packed
+    into waves)."""
 
     z_prepass: bool = False
     msaa: int = 1
@@ -170,6 +171,8 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
             lane_utilization=invocations.astype(jnp.float32)
             / jnp.maximum(waves * ws, 1).astype(jnp.float32),
             quads=n_quads,
+            # The shader's live lanes: the shaded units, plus the helper lanes when they run.
+            shader_evaluations=lanes if cfg.shade_helpers else invocations,
             fragments=n_fragments,
             alpha_invocations=alpha_inv,
             overflow=overflow,

@@ -42,9 +42,10 @@ class ObjectSpaceConfig(PipelineConfig):
     taps along the footprint's major axis (1 = isotropic). eps: barycentric clamp
     [-eps, 1 + eps] for shadels outside their owner triangle (Oxide: 1). sheet_resolution:
     level-0 shadels per side for every object (0 = per object from texel_density in shadels per
-    world unit and the materials' texture/stripe resolution, capped at max_sheet_resolution;
-    with sheet_resolution > 0 a non-default texel_density or max_sheet_resolution, and a
-    sheet_resolution above max_sheet_resolution, are refused: they would be ignored or cap it).
+    world unit and the materials' texture/stripe resolution, capped at max_sheet_resolution).
+    With sheet_resolution > 0, texel_density is unused and max_sheet_resolution only caps it, so
+    a non-default texel_density, a sheet_resolution above max_sheet_resolution and a
+    non-default max_sheet_resolution that lifts no cap (sheet_resolution <= 4096) are refused.
     xatlas_resolution, force_xatlas: chart generation. shade_every, reuse: temporal decoupling
     in sequences. wave_size: lanes per wave for the wave counts (a chunk is 64 lanes).
     """

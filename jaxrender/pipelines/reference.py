@@ -50,15 +50,19 @@ DEFAULT_K = 8
 @dataclass(frozen=True)
 class ReferenceConfig(RenderConfig):
     """k: samples per pixel side (k x k stratified cell centres); chunk: shading work-list
-    chunk size (0: sized to the screen, see ``dispatch.auto_chunk``); convergence: also render at 2k and report ``counts['convergence_psnr']``
-    (LDR PSNR between the k and 2k images; costs 5x the plain render)."""
+    chunk size (0: sized to the screen, see ``dispatch.auto_chunk``; it shows in the dispatch
+    counts lanes, chunks and helper_lanes); convergence: also render at
+    2k and report ``counts['convergence_psnr']`` (LDR PSNR between the k and 2k images; costs
+    5x the plain render)."""
 
     k: int = DEFAULT_K
     chunk: int = 0
     convergence: bool = False
 
     TRACED_FIELDS: ClassVar[tuple[str, ...]] = ("k",)
-    OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ("chunk",)
+    # Not ``chunk``: counts["lanes"], ["chunks"] and ["helper_lanes"] (the idle lanes of the
+    # last chunk of each sample) are read off the dispatch and depend on it.
+    OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ()
 
     def __post_init__(self):
         if int(self.k) < 1:

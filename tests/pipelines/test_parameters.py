@@ -1,5 +1,6 @@
 """Nothing accepted and ignored: every config field of every built-in pipeline either changes
-the output or is declared ``OUTPUT_NEUTRAL`` and leaves it bit-identical.
+the output or is declared ``OUTPUT_NEUTRAL`` and leaves it unchanged (counts and aux arrays
+bit-identical, the image within a few ulps of compiler rounding: ``NEUTRAL_IMAGE_ULPS``).
 
 ``CASES`` gives, per pipeline and field (every dataclass field but width and height), an input
 on which changing that field alone changes the image, a count or an aux array: a scene, the
@@ -7,17 +8,19 @@ base parameters that make the field matter (``per_sample_shading`` needs MSAA, `
 needs ``vrs = "fixed"``, ...), the changed value, and whether the frames are a camera path
 (state carried). A test checks that the table covers exactly each registered built-in
 pipeline's fields, so a new field without a case fails, naming it. ``NEUTRAL_VALUES`` gives a
-changed value for every OUTPUT_NEUTRAL field; those must leave every output bit-identical.
+changed value for every OUTPUT_NEUTRAL field.
 
 A field that has no effect in some configuration of the *other* fields is refused there by its
 config's ``__post_init__`` (``REFUSED``); a field whose effect depends on the scene (a MIP bias
 step without a full store, xatlas settings for meshes with their own unique UVs) is not.
 
-Cost: every distinct config is one compiled program (the rasterizer alone is seconds of XLA on
-a CPU), so the frames are tiny, one small scene serves (almost) every case, the stateful
-pipelines run every case as one 3-frame pan (one base program), and each rendered outcome is
-cached and shared between the cases that need it (a contextual base is often another case's
-changed config).
+Cost: every distinct config is one compiled program, and the rasterizer in each alone is
+seconds of XLA on a CPU. So the frames are tiny, one small scene serves almost every case, the
+stateful pipelines run every case as one 3-frame pan (one base program), and each outcome is
+rendered once and shared between the cases that need it (a contextual base is often another
+case's changed config). That is still about 70 programs, about 15 minutes on one core, so the
+renders are marked ``slow`` (``pytest -m slow``); the table's completeness and the refusals,
+which need no render, run by default.
 """
 
 from __future__ import annotations
@@ -30,21 +33,28 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import PipelineOverflow, get_pipeline, list_pipelines, make_config
+from jaxrender.pipelines import program
 from jaxrender.scene import load_scene
 from jaxrender.scene.camera_path import pan
 
 W, H = 24, 16
 FRAMES = 3  # a pan of this many frames for the stateful pipelines (history, store)
 PAN_PIXELS = 2.0  # per frame
-# An image change at or below float32 shading noise is not an effect of a field (a different
-# but equivalent code path); counts and aux arrays must differ exactly.
-IMAGE_NOISE = 1e-4
+# An image change at float32 rounding level is not an effect of a field (the same shading
+# compiled into a different program can differ by an ulp or two: ~1e-7 here); counts and aux
+# arrays must differ exactly.
+IMAGE_NOISE = 1e-6
 
 # Leaf cards: alpha-tested (the fragment lists and the alpha-test dispatch run, so chunk and
 # fragment_capacity are exercised), textured (LOD settings act), back faces in view (culling
 # acts), several objects and two triangles per card (id kinds act), overdraw (Z pre-pass acts).
+# Its cards are flat-lit and minified to near-constant colours, so DACS's luma variance never
+# decides there: the luma settings take the smoothly lit spheres. Its charts (a card's own
+# uvs) leave no shadel outside its owner triangle, so object_space's eps takes the slivers.
 SCENES = {
-    "foliage": ("foliage", {"n_cards": 12, "card_size": 0.8}),
+    "foliage": ("foliage", {"n_cards": 40, "card_size": 1.2}),
+    "spheres": ("spheres", {"rows": 1, "cols": 2, "lat": 6, "lon": 12}),
+    "sliver": ("sliver", {"n_slivers": 16, "n_degenerate": 4}),
 }
 
 
@@ -57,19 +67,26 @@ class Case(NamedTuple):
     sequence: bool = False
 
 
-F = "foliage"
+F, S, SL = "foliage", "spheres", "sliver"
 SEQ = {"sequence": True}
+# DACS on the spheres: a threshold at which the luma weights and the variance space both move
+# decisions (the threshold is traced: any value shares one program).
+LUMA_THRESHOLD = 1.7e-5
+# object_space: 18 chunks of 64 shadels, fewer than the ~20 the pan marks at bias 0 (the MIP
+# bias is raised until they fit) and more than its coarsest levels need (16 overflow).
+SMALL_STORE = 18 * 64
 
 CASES: dict[str, dict[str, Case]] = {
     "reference": {
         "k": Case(F, {}, 2),
+        "chunk": Case(F, {}, 64),  # counts lanes, chunks, helper_lanes
         "convergence": Case(F, {}, True),  # adds counts["convergence_psnr"]
     },
     "forward": {
         "cull_backfaces": Case(F, {}, True),
         "z_prepass": Case(F, {}, True),
         "msaa": Case(F, {}, 4),
-        "shade_helpers": Case(F, {}, True),
+        "shade_helpers": Case(F, {}, True),  # counts["shader_evaluations"]
         "wave_size": Case(F, {}, 64),
     },
     "deferred": {
@@ -97,38 +114,42 @@ CASES: dict[str, dict[str, Case]] = {
         "threshold": Case(F, {}, 0.0),
         "spacing": Case(F, {}, 8),
         "ids": Case(F, {}, "triangle"),
-        "luma": Case(F, {}, "rec709"),
-        "variance_space": Case(F, {}, "linear"),
+        "luma": Case(S, {"threshold": LUMA_THRESHOLD}, "rec709"),
+        "variance_space": Case(S, {"threshold": LUMA_THRESHOLD}, "linear"),
         "warp_width": Case(F, {}, 64),
         "warp_batches": Case(F, {}, 1),
         "border": Case(F, {}, "shade"),  # 24x16: the last row and column lack a pair
+        "chunk": Case(F, {}, 64),  # counts["dispatch_lanes"]
     },
     "checkerboard": {
         "cull_backfaces": Case(F, {}, True, **SEQ),
         "pattern": Case(F, {}, "2x1", **SEQ),
         "frame": Case(F, {}, 1, **SEQ),
         "temporal": Case(F, {}, False, **SEQ),
-        "ids": Case(F, {}, "triangle", **SEQ),
+        "ids": Case(F, {}, "none", **SEQ),
         "lod_bias": Case(F, {}, -1.0, **SEQ),
         "depth_tolerance": Case(F, {}, 1e-5, **SEQ),
         "wave_size": Case(F, {}, 64, **SEQ),
     },
     "object_space": {
         "cull_backfaces": Case(F, {}, True, **SEQ),
-        "store_shadels": Case(F, {}, 20 * 64, **SEQ),
+        "store_shadels": Case(F, {}, SMALL_STORE, **SEQ),
         "mip_bias": Case(F, {}, 1.0, **SEQ),
         # A store too small for the marked chunks: the bias is raised in these steps.
-        "bias_step": Case(F, {"store_shadels": 20 * 64}, 1.0, **SEQ),
+        "bias_step": Case(F, {"store_shadels": SMALL_STORE}, 1.0, **SEQ),
         "filter": Case(F, {}, "bilinear", **SEQ),
         "aniso_taps": Case(F, {}, 4, **SEQ),
-        "eps": Case(F, {}, 0.0, **SEQ),
+        # Shadels far outside their owner triangle: those a sliver conservatively owns.
+        "eps": Case(SL, {}, 0.0, **SEQ),
         "sheet_resolution": Case(F, {}, 16, **SEQ),
         "texel_density": Case(F, {}, 16.0, **SEQ),  # the ground (untextured) is sized by it
         "max_sheet_resolution": Case(F, {}, 16, **SEQ),
         # Charts of meshes with unique own UVs come from xatlas only when forced.
         "xatlas_resolution": Case(F, {"force_xatlas": True}, 64, **SEQ),
         "force_xatlas": Case(F, {}, True, **SEQ),
-        "shade_every": Case(F, {}, 2, **SEQ),
+        # The eye of a pan stays put and the leaves have no specular lobe, so with reuse
+        # every shading frame copies its resident chunks anyway.
+        "shade_every": Case(F, {"reuse": False}, 2, **SEQ),
         "reuse": Case(F, {}, False, **SEQ),
         "wave_size": Case(F, {}, 64, **SEQ),
     },
@@ -138,6 +159,11 @@ CASES: dict[str, dict[str, Case]] = {
 NEUTRAL_VALUES = {"chunk": 64, "fragment_capacity": 8 * W * H}
 # The input of each pipeline's neutrality check: its cases' scene, and a path if stateful.
 NEUTRAL_INPUT = {p: (F, get_pipeline(p).stateful) for p in CASES}
+# The one allowance in bit-identity: the same shading compiled for another chunk width may
+# round differently (XLA fuses it differently). Measured: forward 1 ulp on 18 of 384 pixels
+# (at XLA's -O0 and default level alike), object_space 2 ulps on 97 of 3456 values; deferred,
+# visbuffer and checkerboard bit-identical. Counts and aux arrays must be bit-identical.
+NEUTRAL_IMAGE_ULPS = 4
 
 # (pipeline, params, field): a field set where the other fields leave it nothing to do; its
 # config must refuse it, naming it.
@@ -201,10 +227,20 @@ def _path(key: str):
     return pan(_scene(key).camera, FRAMES, PAN_PIXELS, H)
 
 
+_current_pipeline = [None]
+
+
 @functools.lru_cache(maxsize=None)
 def _outcome(pipeline: str, scene: str, params: tuple, sequence: bool) -> dict:
     """{name: numpy array} of the image, every count and every aux array (a sequence: stacked
     over its frames), or {"raised": message} when the frame is refused for an overflow."""
+    if _current_pipeline[0] != pipeline:
+        # A compiled XLA:CPU program holds about a thousand memory maps until it is dropped,
+        # and some 60 of them exceed Linux's vm.max_map_count (65530): the process then dies
+        # inside a later compile. The cases run pipeline by pipeline and keep their outcomes,
+        # so the programs of the previous pipeline are not needed again.
+        program._program_jit.clear_cache()
+        _current_pipeline[0] = pipeline
     pipe = get_pipeline(pipeline)
     cfg = make_config(pipeline, width=W, height=H, **dict(params))
     sc = _scene(scene)
@@ -252,8 +288,8 @@ def test_cases_cover_every_field_of_every_builtin_pipeline():
         want = _fields(pipe) - neutral
         have = set(CASES[name])
         assert not have - want, (
-            f"{name}: CASES has {sorted(have - want)}, not a field of its config"
-            + (f" (or declared OUTPUT_NEUTRAL: {sorted(have & neutral)})" if have & neutral else ""))
+            f"{name}: CASES has {sorted(have - want)}, not a field of its config or one "
+            f"declared OUTPUT_NEUTRAL ({sorted(neutral)})")
         assert not want - have, (
             f"{name}: field(s) {sorted(want - have)} have no case in CASES: add an input on "
             f"which changing it changes the output, or declare it OUTPUT_NEUTRAL")
@@ -271,6 +307,7 @@ def test_cases_cover_every_field_of_every_builtin_pipeline():
 FIELD_CASES = [(p, f) for p in CASES for f in CASES[p]]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pipeline,field", FIELD_CASES, ids=[f"{p}-{f}" for p, f in FIELD_CASES])
 def test_field_changes_the_output(pipeline, field):
     case = CASES[pipeline][field]
@@ -287,9 +324,10 @@ NEUTRAL_CASES = [(p, f) for p in CASES
                  for f in get_pipeline(p).config_cls.OUTPUT_NEUTRAL]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pipeline,field", NEUTRAL_CASES,
                          ids=[f"{p}-{f}" for p, f in NEUTRAL_CASES])
-def test_output_neutral_field_leaves_the_output_bit_identical(pipeline, field):
+def test_output_neutral_field_leaves_the_output_unchanged(pipeline, field):
     scene, sequence = NEUTRAL_INPUT[pipeline]
     base = render(pipeline, scene, {}, sequence)
     changed = render(pipeline, scene, {field: NEUTRAL_VALUES[field]}, sequence)
@@ -298,10 +336,16 @@ def test_output_neutral_field_leaves_the_output_bit_identical(pipeline, field):
         f"{pipeline}.{field} = {NEUTRAL_VALUES[field]!r} (OUTPUT_NEUTRAL) changed the outputs "
         f"present: {sorted(set(base) ^ set(changed))}")
     for k in base:
-        np.testing.assert_array_equal(
-            changed[k], base[k],
-            err_msg=f"{pipeline}.{field} = {NEUTRAL_VALUES[field]!r} is declared OUTPUT_NEUTRAL "
-                    f"but changed {k}")
+        msg = (f"{pipeline}.{field} = {NEUTRAL_VALUES[field]!r} is declared OUTPUT_NEUTRAL "
+               f"but changed {k}")
+        if k == "image":
+            np.testing.assert_array_equal(np.isnan(changed[k]), np.isnan(base[k]), err_msg=msg)
+            a, b = np.nan_to_num(changed[k]), np.nan_to_num(base[k])
+            bound = NEUTRAL_IMAGE_ULPS * np.spacing(np.maximum(np.abs(a), np.abs(b)))
+            np.testing.assert_array_less(np.abs(a - b), bound,
+                                         err_msg=f"{msg} by more than {NEUTRAL_IMAGE_ULPS} ulps")
+        else:
+            np.testing.assert_array_equal(changed[k], base[k], err_msg=msg)
 
 
 # ---------------------------------------------------------------- refused where it cannot act
@@ -326,7 +370,9 @@ def test_neighbours_of_a_refusal_stay_valid(pipeline, params):
             f"{pipeline}: {k} = {v!r} was accepted as {got!r}")
 
 
-def test_default_configs_are_valid():
-    for name, pipe in _builtin_pipelines().items():
-        cfg = make_config(name)
-        assert isinstance(cfg, pipe.config_cls), f"{name}: make_config gave {type(cfg)}"
+@pytest.mark.parametrize("width,height", [(320, 180), (33, 21), (33, 17), (1, 1)])
+def test_default_configs_stay_valid(width, height):
+    # A refusal compares with the field's default, so no default config is refused (at 33x21
+    # and 33x17 DACS's border cannot act; the default border is still accepted).
+    for name in _builtin_pipelines():
+        make_config(name, width=width, height=height)
