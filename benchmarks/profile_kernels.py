@@ -156,7 +156,6 @@ def main(argv=None) -> int:
         return 0
     from jaxrender.bench.pipelines import parse_spec
     from jaxrender.pipelines import get_pipeline, make_config
-    from jaxrender.pipelines.registry import no_prepare
     from jaxrender.scene import default_camera, load_scene
 
     name, params = parse_spec(args.scene)
@@ -166,7 +165,7 @@ def main(argv=None) -> int:
     _, overrides = parse_spec(args.what + ":" + ",".join(args.set))  # TOML values
     cfg = make_config(args.what, width=w, height=h, **overrides)
     label = f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}"
-    if pipe.prepare is not no_prepare:  # object_space: charts built on the host, outside
+    if pipe.prepares:  # object_space: charts built on the host, outside
         import jax.numpy as jnp
 
         static = pipe.prepare(sc, cfg)

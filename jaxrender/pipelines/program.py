@@ -97,6 +97,12 @@ def cache_size() -> int:
     return _program_jit._cache_size()
 
 
+def clear_cache() -> None:
+    """Drop every compiled program of this process (each holds host memory maps; a process
+    that compiles many configs, like the parameter audit, runs out of them)."""
+    _program_jit.clear_cache()
+
+
 # ---------------------------------------------------------------- arguments and checks
 
 
@@ -144,25 +150,6 @@ def check_overflow(pipe, cfg, frame: Frame) -> Frame:
 # ---------------------------------------------------------------- entry points
 
 
-def render(pipe, scene, camera, cfg) -> Frame:
-    """One frame of ``pipe`` from its initial state, overflow-checked."""
-    static = pipe.prepare(scene, cfg)
-    static_cfg, traced = split_config(cfg)
-    frame = _program_jit(pipe, static_cfg, "frame", scene, static, camera, traced)
-    return frame if _is_traced(scene, camera) else check_overflow(pipe, cfg, frame)
-
-
-def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0) -> Frame:
-    """Frames of a camera path through ``pipe``'s steps, state carried, warm-up dropped."""
-    cameras = stack_cameras(cameras)
-    n = int(np.shape(cameras.eye)[0])
-    mode = _mode(True, warmup_frames, n)
-    static = pipe.prepare(scene, cfg)
-    static_cfg, traced = split_config(cfg)
-    frames = _program_jit(pipe, static_cfg, mode, scene, static, cameras, traced)
-    return frames if _is_traced(scene, cameras) else check_overflow(pipe, cfg, frames)
-
-
 @dataclass(frozen=True)
 class Prepared:
     """What a lowered program needs besides its compiled code: the pipeline's static data and
@@ -173,17 +160,38 @@ class Prepared:
     sequence: bool
 
 
-def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0):
-    """(jax Lowered program, Prepared) for ``pipe`` on this scene and camera (a single camera,
-    or a batched path when ``sequence``). Host-side preparation happens here."""
+def _arguments(pipe, scene, cameras, cfg, sequence: bool, warmup_frames: int):
+    """(static jit arguments, dynamic arguments, Prepared) of ``pipe``'s program; host-side
+    preparation happens here."""
     if sequence:
         cameras = stack_cameras(cameras)
     n = int(np.shape(cameras.eye)[0]) if sequence else 1
     mode = _mode(sequence, warmup_frames, n)
     static = pipe.prepare(scene, cfg)
     static_cfg, traced = split_config(cfg)
-    lowered = _program_jit.lower(pipe, static_cfg, mode, scene, static, cameras, traced)
-    return lowered, Prepared(static, traced, sequence)
+    return ((pipe, static_cfg, mode), (scene, static, cameras, traced),
+            Prepared(static, traced, sequence))
+
+
+def render(pipe, scene, camera, cfg) -> Frame:
+    """One frame of ``pipe`` from its initial state, overflow-checked."""
+    fixed, args, _ = _arguments(pipe, scene, camera, cfg, False, 0)
+    frame = _program_jit(*fixed, *args)
+    return frame if _is_traced(scene, camera) else check_overflow(pipe, cfg, frame)
+
+
+def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0) -> Frame:
+    """Frames of a camera path through ``pipe``'s steps, state carried, warm-up dropped."""
+    fixed, args, _ = _arguments(pipe, scene, cameras, cfg, True, warmup_frames)
+    frames = _program_jit(*fixed, *args)
+    return frames if _is_traced(*args) else check_overflow(pipe, cfg, frames)
+
+
+def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0):
+    """(jax Lowered program, Prepared) for ``pipe`` on this scene and camera (a single camera,
+    or a path when ``sequence``)."""
+    fixed, args, prepared = _arguments(pipe, scene, cameras, cfg, sequence, warmup_frames)
+    return _program_jit.lower(*fixed, *args), prepared
 
 
 def bind(pipe, cfg, compiled, prepared: Prepared) -> Callable:
@@ -209,6 +217,6 @@ def compile(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames:
     return bind(pipe, cfg, compiled, prepared), (time.perf_counter() - t0) * 1e3
 
 
-__all__ = ["PipelineOverflow", "Prepared", "bind", "cache_size", "check_overflow", "compile",
+__all__ = ["PipelineOverflow", "Prepared", "bind", "cache_size", "check_overflow", "clear_cache", "compile",
            "join_config", "lower", "render", "render_sequence", "split_config",
            "stack_cameras"]

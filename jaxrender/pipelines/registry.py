@@ -68,6 +68,11 @@ class Pipeline:
     def stateful(self) -> bool:
         return self.init is not no_state
 
+    @property
+    def prepares(self) -> bool:
+        """Has host-side preparation per scene (object-space sheets)."""
+        return self.prepare is not no_prepare
+
     def render(self, scene, camera, cfg):
         """One frame from ``init`` (frame index 0): a Frame with image (H, W, 3)."""
         from jaxrender.pipelines import program

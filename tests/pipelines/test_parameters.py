@@ -240,7 +240,7 @@ def _outcome(pipeline: str, scene: str, params: tuple, sequence: bool) -> dict:
         # and some 60 of them exceed Linux's vm.max_map_count (65530): the process then dies
         # inside a later compile. The cases run pipeline by pipeline and keep their outcomes,
         # so the programs of the previous pipeline are not needed again.
-        program._program_jit.clear_cache()
+        program.clear_cache()
         _current_pipeline[0] = pipeline
     pipe = get_pipeline(pipeline)
     cfg = make_config(pipeline, width=W, height=H, **dict(params))
