@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import platform
-import statistics
 import time
 
 import jax
@@ -28,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.metrics import image_metrics
+from jaxrender.timing import device_description, time_call
 from jaxrender.pipelines import checkerboard, dacs, deferred, get_pipeline, make_config
 from jaxrender.scene import load_scene
 from jaxrender.scene.camera_path import pan
@@ -43,13 +43,7 @@ PUBLISHED = {
 
 
 def median_ms(fn, repeats):
-    jax.block_until_ready(fn())  # warm-up (compiled already)
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        ts.append((time.perf_counter() - t0) * 1e3)
-    return statistics.median(ts)
+    return time_call(fn, repeats=repeats, warmup=1)[1]  # compiled already: one warm-up call
 
 
 def quality(images, refs):
@@ -147,8 +141,7 @@ def main():
     ap.add_argument("--against", choices=("deferred", "reference"), default="deferred",
                     help="ground truth: full-rate deferred (as the paper) or the k x k reference")
     args = ap.parse_args()
-    dev = jax.devices()[0]
-    print(f"device: {dev.platform} ({platform.processor() or platform.machine()}), "
+    print(f"device: {device_description()}, "
           f"jax {jax.__version__}, {args.width}x{args.height}, pan 1 px/frame, "
           f"frames 1..{args.frames - 1} scored against {args.against}"
           f"{f' (k={args.k})' if args.against == 'reference' else ''}, chunk {args.chunk}\n")

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import platform
-import statistics
 import time
 
 import jax
@@ -16,6 +15,7 @@ import jax
 from jaxrender.raster import rasterize
 from jaxrender.scene import load_scene
 from jaxrender.shading import shade, surface_points
+from jaxrender.timing import device_description, time_first_call
 
 VARIANTS = [  # (label, changes for "on", changes for "off")
     ("textures", {"textures": True}, {"textures": False}),
@@ -30,16 +30,9 @@ VARIANTS = [  # (label, changes for "on", changes for "off")
 
 
 def timed(fn, *args, repeats):
-    t0 = time.perf_counter()
-    jax.block_until_ready(fn(*args))  # compile + first run
-    compile_s = time.perf_counter() - t0
-    jax.block_until_ready(fn(*args))  # warm-up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn(*args))
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), compile_s
+    """(median s, compile s: the first call's time minus the median)."""
+    r = time_first_call(lambda: fn(*args), repeats)
+    return r["median_ms"] / 1e3, r["compile_s"]
 
 
 def main(argv=None):
@@ -61,7 +54,7 @@ def main(argv=None):
     n = int(pts.valid.sum())
     pts = jax.tree_util.tree_map(lambda a: a[pts.valid], pts)  # a compacted work list
     base = scene.effects
-    print(f"device: {jax.devices()[0].device_kind} ({platform.node()}), scene {scene.name}, "
+    print(f"device: {device_description()} ({platform.node()}), scene {scene.name}, "
           f"{n} shaded points ({args.width}x{args.height}), median of {args.repeats}\n")
     print("| effect | on (ms) | off (ms) | on/off | compile on (s) | compile off (s) |")
     print("|---|---:|---:|---:|---:|---:|")

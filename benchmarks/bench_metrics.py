@@ -22,30 +22,20 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender import metrics
-from jaxrender.metrics import _common
+from jaxrender.timing import time_call, time_first_call
 
 
 def _time_jax(fn, repeats):
-    t0 = time.perf_counter()
-    jax.block_until_ready(fn())
-    first = time.perf_counter() - t0
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        times.append(time.perf_counter() - t0)
-    med = statistics.median(times)
-    return med, max(first - med, 0.0)
+    """(median s, compile s: the first call's time minus the median)."""
+    r = time_first_call(fn, repeats)
+    return r["median_ms"] / 1e3, r["compile_s"]
 
 
 def _time_lib(fn, frames, repeats):
-    times = []
-    for _ in range(repeats):
-        for t in range(frames):
-            t0 = time.perf_counter()
-            fn(t)
-            times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+    """The median s of one host call over ``frames`` frames, ``repeats`` rounds."""
+    samples = [ms for _ in range(repeats) for t in range(frames)
+               for ms in time_call(fn, t, repeats=1)[2]]
+    return statistics.median(samples) / 1e3
 
 
 def _library_calls(ref_np, test_np):
@@ -98,11 +88,11 @@ def main(argv=None):
     p.add_argument("--lib-frames", type=int, default=2, help="frames timed per library (0: skip)")
     p.add_argument("--lib-repeats", type=int, default=1)
     p.add_argument("--dtype", choices=("float32", "float64"), default="float32")
-    p.add_argument("--impl", choices=("slices", "conv"), default=_common.CORRELATE_IMPL,
+    p.add_argument("--impl", choices=("slices", "conv"), default=metrics.correlate_impl(),
                    help="separable filter implementation (SSIM, FLIP)")
     p.add_argument("--only", nargs="*", default=None, help="subset of metric keys")
     args = p.parse_args(argv)
-    _common.CORRELATE_IMPL = args.impl
+    metrics.set_correlate_impl(args.impl)
     dtype = np.dtype(args.dtype)
 
     dev = jax.devices()[0]

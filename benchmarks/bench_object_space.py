@@ -21,19 +21,13 @@ from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.pipelines import object_space as osp
 from jaxrender.scene.builtin import builtin_scene
 from jaxrender.shading import with_shadow_map
+from jaxrender.timing import device_description, time_first_call
 
 
 def _time(fn, repeats):
-    t0 = time.perf_counter()
-    out = jax.block_until_ready(fn())
-    first = (time.perf_counter() - t0) * 1e3
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        samples.append((time.perf_counter() - t0) * 1e3)
-    med = float(np.median(samples))
-    return out, med, max(first - med, 0.0)
+    """(output, median ms, first call minus the median in ms)."""
+    r = time_first_call(fn, repeats)
+    return r["out"], r["median_ms"], r["compile_s"] * 1e3
 
 
 def main(argv=None):
@@ -45,7 +39,7 @@ def main(argv=None):
                     help="store capacities to try, in shadels per pixel")
     a = ap.parse_args(argv)
     w, h = (int(v) for v in a.size.split("x"))
-    print(f"device: {jax.devices()[0].device_kind} ({jax.default_backend()}), {w}x{h}\n")
+    print(f"device: {device_description()}, {w}x{h}\n")
     print("| scene | store/px | sheets (res, source) | sheet build s | covered px | shadels/px "
           "| shaded | chunk fill | trilinear x | MIP chain mem x | bias | os ms | compile s "
           "| deferred ms |")

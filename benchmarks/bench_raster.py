@@ -20,7 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common import dump, environment, print_table, time_jitted  # noqa: E402
+from jaxrender.bench.report import dump, print_table  # noqa: E402
+from jaxrender.timing import environment, time_compiled  # noqa: E402
 
 from jaxrender.raster import rasterize_clip  # noqa: E402
 from jaxrender.raster.rasterize import (  # noqa: E402
@@ -110,7 +111,7 @@ def main(argv=None) -> int:
     for width, height, n in PRESETS[args.preset]:
         clip, faces = scene(n, width, height)
         st = static_args(faces.shape[0], width, height)
-        r = time_jitted(_rasterize_program, clip, faces, repeats=args.repeats, **st)
+        r = time_compiled(_rasterize_program, clip, faces, repeats=args.repeats, **st)
         vis = r.pop("out")
         row = dict(resolution=f"{width}x{height}", triangles=int(faces.shape[0]), **r,
                    fragments=int(vis.counts["fragments"]), work_items=int(vis.counts["work_items"]),
@@ -128,11 +129,11 @@ def main(argv=None) -> int:
         global BRUTE_SIZE
         bw, bh = BRUTE_SIZE = tuple(int(x) for x in args.brute_size.split("x"))
         clip, faces = scene(2_500, bw, bh)
-        r = time_jitted(_brute_force, clip, faces, repeats=max(2, args.repeats // 4))
+        r = time_compiled(_brute_force, clip, faces, repeats=max(2, args.repeats // 4))
         ids = r.pop("out")
         times = [r["median_ms"] / 1e3]
         st = static_args(faces.shape[0], bw, bh)
-        r = time_jitted(_rasterize_program, clip, faces, repeats=args.repeats, **st)
+        r = time_compiled(_rasterize_program, clip, faces, repeats=args.repeats, **st)
         vis = r.pop("out")
         agree = float(np.mean(np.asarray(ids) == np.asarray(vis.tri_id)))
         rows.append(dict(resolution=f"{bw}x{bh}", triangles=int(faces.shape[0]),

@@ -19,15 +19,15 @@ import numpy as np
 
 from jaxrender import parallel
 from jaxrender.bench.raster import terrain_camera
-from jaxrender.bench.timing import dump, environment, print_table
-from jaxrender.bench.timing import time_first_call
+from jaxrender.bench.report import dump, print_table
+from jaxrender.timing import environment, time_first_call
 from jaxrender.raster import rasterize
 from jaxrender.raster.test_meshes import terrain
 from jaxrender.scene.camera_path import frame, orbit
 
 
 def _time(call, repeats):
-    """(output, steady median in s, first call minus median in s): jaxrender.bench's timing."""
+    """(output, steady median in s, first call minus median in s)."""
     r = time_first_call(call, repeats)
     return r["out"], r["median_ms"] / 1e3, r["compile_s"]
 

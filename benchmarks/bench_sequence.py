@@ -26,7 +26,8 @@ import jax
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.common import environment, print_table  # noqa: E402
+from jaxrender.bench.report import print_table  # noqa: E402
+from jaxrender.timing import environment, time_call  # noqa: E402
 from jaxrender.pipelines import list_pipelines, make_config, program  # noqa: E402
 from jaxrender.scene import load_scene  # noqa: E402
 from jaxrender.scene.camera_path import pan  # noqa: E402
@@ -44,9 +45,7 @@ def _camera(path, i):
 
 
 def _time(fn, *args) -> float:
-    t0 = time.perf_counter()
-    jax.block_until_ready(fn(*args))
-    return (time.perf_counter() - t0) * 1e3
+    return time_call(fn, *args, repeats=1)[1]
 
 
 def main(argv=None) -> int:

@@ -22,6 +22,8 @@ import time
 
 import jax
 
+from jaxrender.timing import device_description
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 _HOST_NOISE = ("ThreadpoolListener", "end: ", "ThunkExecutor", "$", "PjitFunction")
@@ -142,7 +144,7 @@ def main(argv=None) -> int:
     ap.add_argument("--top", type=int, default=15)
     args = ap.parse_args(argv)
     w, h = (int(v) for v in args.resolution.lower().split("x"))
-    print(f"device: {jax.devices()[0].device_kind}, jax {jax.__version__}")
+    print(f"device: {device_description()}, jax {jax.__version__}")
     if args.what == "raster":
         from bench_raster import scene, static_args
 

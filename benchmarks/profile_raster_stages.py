@@ -14,7 +14,7 @@ import jax.numpy as jnp
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_raster import scene  # noqa: E402
-from common import environment, time_jitted  # noqa: E402
+from jaxrender.timing import environment, time_compiled  # noqa: E402
 
 from jaxrender.raster.coverage import EMPTY_KEY, _chunk, depth_key  # noqa: E402
 from jaxrender.raster.resolve import resolve  # noqa: E402
@@ -37,7 +37,7 @@ def main(argv=None):
         ones, ids = jnp.ones((n,), bool), jnp.arange(n, dtype=jnp.int32)
 
         def t(name, f, *args):
-            r = time_jitted(jax.jit(f), *args, repeats=20)
+            r = time_compiled(jax.jit(f), *args, repeats=20)
             print(f"{name:40s} {r['median_ms']:8.3f} ms")
             return r["out"]
 

@@ -127,7 +127,8 @@ def cmd_render(a) -> int:
     import matplotlib.image
 
     from jaxrender.figures.io import to_display
-    from jaxrender.study import backend, timing
+    from jaxrender import timing
+    from jaxrender.study import backend
     from jaxrender.study.runner import _py
     from jaxrender.study.schema import _Checker, check_params
 

@@ -30,11 +30,11 @@ sweep = { levels = [2, 8] }
 
 @pytest.fixture
 def fake(monkeypatch, tmp_path):
-    from jaxrender.study import testing
+    from tests.study import doubles
 
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "cache"))
     monkeypatch.chdir(tmp_path)
-    testing.install(monkeypatch)
+    doubles.install(monkeypatch)
     (tmp_path / "configs").mkdir()
     p = tmp_path / "cli.toml"
     p.write_text(STUDY)

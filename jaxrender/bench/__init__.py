@@ -2,7 +2,7 @@
 and peak device memory, printed as markdown tables and written as JSON.
 
     jaxrender bench --quick                    # a minute on a laptop CPU
-    jaxrender bench --json bench.json          # the issue-11 sweeps (for the GPU)
+    jaxrender bench --json bench.json          # the full sweeps (for the GPU)
     python -m jaxrender.bench --sections raster --json raster.json
 
 The raster sweeps use the terrain of ``benchmarks/bench_raster.py`` (same mesh and camera);
@@ -29,7 +29,7 @@ def _res(text: str) -> tuple[int, int]:
 
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true",
-                   help="small sizes (a CPU smoke run) instead of the issue-11 sweeps")
+                   help="small sizes (a CPU smoke run) instead of the full sweeps")
     p.add_argument("--json", metavar="PATH", help="write every row and the environment here")
     p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS))
     p.add_argument("--resolution", type=_res, help="pipelines: WxH (default 1920x1080, "
@@ -50,10 +50,17 @@ def run(a: argparse.Namespace) -> int:
     import sys
     import time
 
-    from jaxrender.bench import timing
+    import datetime
+    import platform
+
+    import jax
+
+    from jaxrender import timing
+    from jaxrender.bench import report
 
     t_start = time.monotonic()
-    env = timing.environment()
+    env = {**timing.environment(), "devices": jax.device_count(),
+           "date": datetime.date.today().isoformat(), "host": platform.node()}
     print(f"# jaxrender bench\n\n{env}\n", flush=True)
     repeats = a.repeats or (3 if a.quick else 10)
     out = {"environment": env, "quick": bool(a.quick), "sections": {}, "memory": {}}
@@ -65,8 +72,8 @@ def run(a: argparse.Namespace) -> int:
         kept = []
         for row in rows:
             kept.append(row)
-            print("| " + " | ".join(timing.fmt(row.get(c)) for c in columns) + " |", flush=True)
-            timing.dump(a.json, out | {"sections": out["sections"] | {name: kept}})
+            print("| " + " | ".join(report.fmt(row.get(c)) for c in columns) + " |", flush=True)
+            report.dump(a.json, out | {"sections": out["sections"] | {name: kept}})
         out["sections"][name] = kept
         out["memory"][name] = timing.peak_memory()
         print(f"\npeak device memory after {name}: {out['memory'][name]}", flush=True)
@@ -104,7 +111,7 @@ def run(a: argparse.Namespace) -> int:
         section("metrics", metrics.time_metrics(w, h, frames, repeats), metrics.COLUMNS)
 
     out["total_s"] = time.monotonic() - t_start
-    timing.dump(a.json, out)
+    report.dump(a.json, out)
     print(f"\ntotal {out['total_s']:.1f} s" + (f"; wrote {a.json}" if a.json else ""))
     sys.stdout.flush()
     return 0

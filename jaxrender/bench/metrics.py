@@ -8,7 +8,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.bench.timing import time_first_call
+from jaxrender.timing import time_first_call
 
 
 def _cases():

@@ -6,7 +6,7 @@ from __future__ import annotations
 import time
 import tomllib
 
-from jaxrender.bench.timing import time_first_call
+from jaxrender.timing import time_first_call
 
 # Scenes as "name" or "name:key=value,key=value" (TOML values); the 100k-triangle scene of the
 # issue-11 targets comes second, so that a time budget reaches it.
@@ -53,7 +53,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
     """Yield one row per (scene, pipeline); rows past ``deadline`` (time.monotonic) are skipped."""
     from jaxrender.pipelines import get_pipeline, make_config
     from jaxrender.scene import default_camera, load_scene
-    from jaxrender.study.timing import compile_program
+    from jaxrender.timing import compile_program
 
     for scene_spec in scene_specs:
         base = dict(scene=scene_spec, resolution=f"{width}x{height}")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.bench.timing import time_compiled
+from jaxrender.timing import time_compiled
 from jaxrender.raster.rasterize import (_rasterize_program, default_clip_capacity,
                                         default_work_capacity)
 from jaxrender.raster.samples import CENTER, to_fixed

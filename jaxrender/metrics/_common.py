@@ -105,6 +105,19 @@ def broadcast_taps(taps: Array, ndim: int, axis: int) -> Array:
 CORRELATE_IMPL = "slices"
 
 
+def correlate_impl() -> str:
+    """How the separable filters (SSIM, FLIP) run: "slices" or "conv"."""
+    return CORRELATE_IMPL
+
+
+def set_correlate_impl(impl: str) -> None:
+    """Choose "slices" or "conv" (see CORRELATE_IMPL); set it before a metric is traced."""
+    global CORRELATE_IMPL
+    if impl not in ("slices", "conv"):
+        raise ValueError(f"correlate impl: expected 'slices' or 'conv', got {impl!r}")
+    CORRELATE_IMPL = impl
+
+
 def correlate_valid(x: Array, taps: Array, axis: int) -> Array:
     """1-D correlation along ``axis`` (-3 = H or -2 = W of a (..., H, W, C) array) over the
     valid region: out[i] = sum_k taps[k] x[i + k]. ``taps`` is (n,) (same for every channel) or

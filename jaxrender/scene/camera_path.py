@@ -8,6 +8,7 @@ was shifted by (0 unless made with ``jitter``). Iterating yields (camera, previo
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import NamedTuple
 
 import jax
@@ -139,3 +140,66 @@ def jitter(camera: Camera, n_frames: int, width: int, height: int, *,
         pitch = pixels_to_angle(dy, camera, height)
         cams.append(_make(eye, _yaw_pitch(rot, yaw, pitch), fov, near, far))
     return _path(cams, offs)
+
+
+# ------------------------------------------------------------------ path types by name
+
+REQUIRED = object()  # a parameter without a default
+
+
+class PathParam(NamedTuple):
+    kind: type  # float, str, or tuple (3 numbers)
+    default: object = REQUIRED
+
+
+class PathType(NamedTuple):
+    """A camera path a study names by ``type``: ``build(camera, frames, width, height,
+    **params)`` starts from the scene's default camera and returns a CameraPath or a list of
+    cameras; ``params`` declares what a study may set."""
+
+    build: Callable
+    params: dict
+
+
+def _static(camera, frames, width, height):
+    return [camera] * frames
+
+
+def _pan(camera, frames, width, height, *, pixels_per_frame, direction="horizontal"):
+    return pan(camera, frames, float(pixels_per_frame), height, direction=direction)
+
+
+def _dolly(camera, frames, width, height, *, distance_per_frame):
+    return dolly(camera, frames, float(distance_per_frame))
+
+
+def _jitter(camera, frames, width, height, *, pattern="halton"):
+    return jitter(camera, frames, width, height, pattern=pattern)
+
+
+def _orbit(camera, frames, width, height, *, degrees_per_frame, distance=4.0, center=(),
+           radius=0.0):
+    """Around ``center`` (default: the point ``distance`` ahead of the camera), starting where
+    the camera stands."""
+    eye = np.asarray(camera.eye, np.float64)
+    fwd = -np.asarray(camera.rotation, np.float64)[2]
+    c = np.asarray(center or eye + fwd * distance)
+    rel = eye - c
+    radius = float(radius or np.hypot(rel[0], rel[2]) or 1.0)
+    return orbit(c, radius, frames, float(degrees_per_frame), height=rel[1],
+                 start_deg=float(np.rad2deg(np.arctan2(rel[0], rel[2]))),
+                 fov_y_deg=float(np.rad2deg(float(camera.fov_y))),
+                 near=float(camera.near), far=float(camera.far))
+
+
+PATH_TYPES: dict[str, PathType] = {
+    "static": PathType(_static, {}),
+    "pan": PathType(_pan, {"pixels_per_frame": PathParam(float),
+                           "direction": PathParam(str, "horizontal")}),
+    "orbit": PathType(_orbit, {"degrees_per_frame": PathParam(float),
+                               "distance": PathParam(float, 4.0),
+                               "center": PathParam(tuple, ()),
+                               "radius": PathParam(float, 0.0)}),
+    "dolly": PathType(_dolly, {"distance_per_frame": PathParam(float)}),
+    "jitter": PathType(_jitter, {"pattern": PathParam(str, "halton")}),
+}

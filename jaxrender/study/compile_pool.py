@@ -147,7 +147,7 @@ def load(result: bytes, job: Job):
     from jax.experimental.serialize_executable import deserialize_and_load
 
     from jaxrender.pipelines import program
-    from jaxrender.study import timing
+    from jaxrender import timing
 
     ms, exe, in_tree, out_tree, prepared = pickle.loads(result)
     dev = jax.devices()[0]

@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from jaxrender.pipelines.program import PipelineOverflow, stack_cameras
-from jaxrender.study import backend, cache, schema, store, timing
+from jaxrender import timing
+from jaxrender.study import backend, cache, schema, store
 from jaxrender.study.schema import Study
 
 
@@ -401,7 +402,7 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    env = timing.device_info()
+    env = timing.environment()
     store.atomic_write_text(out_dir / "study.toml", schema.to_toml(study))
     store.atomic_write_text(out_dir / "environment.json", json.dumps(
         {**env, "code_version": cache.code_version(), "study_file": study.file,

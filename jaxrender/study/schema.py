@@ -19,6 +19,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from jaxrender.metrics import METRICS
+from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
 from jaxrender.study import backend
 from jaxrender.study.errors import StudyError, UserError
 
@@ -384,7 +386,7 @@ def _paths(ck: _Checker, raw, root: Path, default_frames: int) -> tuple[PathSpec
     if raw is None:
         return (PathSpec("static", "static", default_frames),)
     items = ck.list_(raw, "paths")
-    known = backend.path_types()
+    known = list(PATH_TYPES)
     out: list[PathSpec] = []
     for i, item in enumerate(items):
         path = f"paths[{i}]"
@@ -420,22 +422,22 @@ def _paths(ck: _Checker, raw, root: Path, default_frames: int) -> tuple[PathSpec
         for k, v in params.items():
             if isinstance(v, dict):
                 ck.fail(f"{path}.params.{k}", "expected a value, got a table")
-        spec = backend.PATH_PARAMS.get(ptype)
+        spec = PATH_TYPES[ptype].params
         if spec is not None:
             for k, v in params.items():
                 if k not in spec:
                     ck.fail(f"{path}.params.{k}", f"camera path {ptype!r} has no parameter "
                             f"{k!r}; its parameters are: {', '.join(spec) or '(none)'}")
-                default, kind = spec[k]
+                kind = spec[k].kind
                 if kind is float:
                     params[k] = ck.num(v, f"{path}.params.{k}")
                 elif kind is str:
                     params[k] = ck.str_(v, f"{path}.params.{k}")
-                elif kind is list and not (isinstance(v, list) and len(v) == 3 and all(
+                elif kind is tuple and not (isinstance(v, list) and len(v) == 3 and all(
                         isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
                     ck.fail(f"{path}.params.{k}", "expected a list of 3 numbers")
-            for k, (default, _) in spec.items():
-                if default is None and k not in params:
+            for k, p in spec.items():
+                if p.default is REQUIRED and k not in params:
                     ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
         if any(p.name == name for p in out):
             ck.fail(f"{path}.name", f"camera path name {name!r} is used twice")
@@ -575,7 +577,7 @@ def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | N
     except UserError as e:
         raise StudyError(file, "resolution", str(e).split(": ", 1)[1]) from None
     frames = ck.int_(data.get("frames", 1), "frames", lo=1)
-    metrics = ck.names(data.get("metrics", list(backend.METRICS)), "metrics", backend.METRICS)
+    metrics = ck.names(data.get("metrics", list(METRICS)), "metrics", tuple(METRICS))
     if "mssim" in metrics and min(resolution) < SSIM_MIN_SIDE:
         ck.fail("resolution", f"MSSIM needs images of at least {SSIM_MIN_SIDE}x{SSIM_MIN_SIDE} "
                 f"pixels (its window); drop 'mssim' from metrics or raise the resolution")

@@ -38,7 +38,7 @@ NAMES = ("image_grid", "temporal", "pareto_time")
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
-    from jaxrender.study import testing
+    from tests.study import doubles
     from jaxrender.study.runner import run_study
     from jaxrender.study.schema import load_study
 
@@ -47,7 +47,7 @@ def run_dir(tmp_path_factory):
     (root / "figs.toml").write_text(STUDY)
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("JAXRENDER_CACHE", str(root / "cache"))
-        testing.install(mp)
+        doubles.install(mp)
         run_study(load_study(root / "figs.toml"), root / "run", progress=False, figures=False,
                   log=lambda s: None)
     return root / "run"

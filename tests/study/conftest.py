@@ -7,10 +7,10 @@ import pytest
 
 @pytest.fixture
 def fake(monkeypatch, tmp_path):
-    from jaxrender.study import testing
+    from tests.study import doubles
 
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "cache"))
-    testing.install(monkeypatch)
+    doubles.install(monkeypatch)
     (tmp_path / "configs" / "paths").mkdir(parents=True)
     (tmp_path / "configs" / "pipelines").mkdir(parents=True)
     (tmp_path / "configs" / "scenes").mkdir(parents=True)

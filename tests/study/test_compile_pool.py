@@ -9,12 +9,13 @@ import jax
 import numpy as np
 import pytest
 
-from jaxrender.study import backend, compile_pool, runner, testing
+from jaxrender.study import backend, compile_pool, runner
+from tests.study import doubles
 from jaxrender.study.schema import load_study
 
 
 class FakeLoader:
-    """The fake scenes of ``testing.install``, loadable in a worker (picklable by reference;
+    """The fake scenes of ``doubles.install``, loadable in a worker (picklable by reference;
     install's own loader is a closure, which a worker cannot receive)."""
 
     colors = {"tiny": (1.0, 0.8, 0.6), "tiny2": (0.3, 0.9, 0.5)}
@@ -22,7 +23,7 @@ class FakeLoader:
     def __call__(self, source, params):
         import jax.numpy as jnp
 
-        return testing.FakeScene(jnp.asarray(self.colors[source], jnp.float32), source)
+        return doubles.FakeScene(jnp.asarray(self.colors[source], jnp.float32), source)
 
 
 def _plan(study_file):
@@ -114,7 +115,7 @@ def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog):
 
 
 def test_unpicklable_falls_back_to_threads(tiny_study, tmp_path, monkeypatch, caplog):
-    # testing.install's scene loader is a closure: no job can go to a worker
+    # doubles.install's scene loader is a closure: no job can go to a worker
     plan = _plan(tiny_study)
     threads, ref_t = _compile(monkeypatch, "0", plan, tmp_path)
     with caplog.at_level(logging.WARNING, "jaxrender.study"):

@@ -108,13 +108,12 @@ def test_one_overflow_error_everywhere(fake, monkeypatch, capsys):
     import pytest
 
     from jaxrender.pipelines import PipelineOverflow
-    from jaxrender.study import testing
+    from tests.study import doubles
 
     pipe = registry.Pipeline("capped_test", CapConfig, capped_step)
     monkeypatch.setitem(registry.REGISTRY, "capped_test", pipe)
-    scene = testing.FakeScene(jnp.ones(3), "tiny")
-    cams = testing.fake_cameras(scene, type("P", (), {"type": "static", "params": (),
-                                                      "frames": 2})(), 24, 16)
+    scene = doubles.FakeScene(jnp.ones(3), "tiny")
+    cams = doubles.fake_pan(None, 2, 24, 16, step=0.0)
     small = CapConfig(width=24, height=16, capacity=10)
     with pytest.raises(PipelineOverflow, match=r"capped_test: .*raise capacity \(now 10\)"):
         pipe.render(scene, cams[0], small)

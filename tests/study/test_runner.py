@@ -107,13 +107,13 @@ def test_resume_recomputes_nothing_stored(tiny_study, tmp_path, monkeypatch):
 
 def test_reference_cached(tiny_study, tmp_path, monkeypatch):
     from jaxrender.pipelines import registry
-    from jaxrender.study import testing
+    from tests.study import doubles
 
     calls = []
 
     def counted(scene, camera, cfg):
         calls.append(1)
-        return testing.render_reference(scene, camera, cfg)
+        return doubles.render_reference(scene, camera, cfg)
 
     p = registry.REGISTRY["reference"]
     monkeypatch.setitem(registry.REGISTRY, "reference", dataclasses.replace(p, step=registry.FrameStep(counted)))
@@ -127,11 +127,11 @@ def test_reference_cached(tiny_study, tmp_path, monkeypatch):
 
 def test_convergence_warning(tiny_study, tmp_path, monkeypatch):
     from jaxrender.pipelines import registry
-    from jaxrender.study import testing
+    from tests.study import doubles
     from jaxrender.types import Frame
 
     def poor(scene, camera, cfg):
-        f = testing.render_reference(scene, camera, cfg)
+        f = doubles.render_reference(scene, camera, cfg)
         return Frame(f.image, {"convergence_psnr": 20.0}, {})
 
     p = registry.REGISTRY["reference"]
@@ -144,11 +144,12 @@ def test_convergence_warning(tiny_study, tmp_path, monkeypatch):
 KILL_SCRIPT = """
 import sys, time
 import pytest
-from jaxrender.study import testing, store, runner
+from jaxrender.study import store, runner
+from tests.study import doubles
 from jaxrender.study.schema import load_study
 
 mp = pytest.MonkeyPatch()
-testing.install(mp)
+doubles.install(mp)
 real = store.ResultStore.append
 def slow(self, rows):
     real(self, rows)
@@ -195,15 +196,11 @@ def test_kill_9_leaves_no_half_row(tiny_study, tmp_path):
 
 def test_real_metrics(fake, tiny_study, tmp_path, monkeypatch):
     """The runner with jaxrender.metrics itself (display-referred) on the fake pipelines."""
-    import importlib
-
     import jaxrender.metrics as m
+    from tests.study import doubles
 
-    homes = {"rmse": "error", "psnr": "error", "ssim": "ssim", "flip": "flip",
-             "delta_e2000": "color", "temporal_error": "temporal"}
-    for name, mod in homes.items():  # undo the fakes the fixture installed
-        real = getattr(importlib.import_module(f"jaxrender.metrics.{mod}"), name)
-        monkeypatch.setattr(m, name, real)
+    for name, metric in doubles.REAL_METRICS.items():  # undo the fakes the fixture installed
+        monkeypatch.setitem(m.METRICS, name, metric)
     study = load_study(tiny_study).with_overrides(frames=2)
     res = run_study(study, tmp_path / "real", progress=False, figures=False, log=lambda s: None)
     for r in res.rows:

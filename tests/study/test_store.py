@@ -5,7 +5,8 @@ import json
 
 import jax.numpy as jnp
 
-from jaxrender.study import store, timing
+from jaxrender import timing
+from jaxrender.study import store
 
 
 def _rows(seq, n):
@@ -73,5 +74,5 @@ def test_timing_median_and_compile():
     out, med, samples = timing.time_call(comp.call, jnp.ones(4), jnp.float32(1.0), repeats=3,
                                          warmup=1)
     assert float(out.image[0]) == 4.0 and len(samples) == 3 and min(samples) <= med <= max(samples)
-    info = timing.device_info()
+    info = timing.environment()
     assert info["device"].startswith("cpu") and info["jax_version"]

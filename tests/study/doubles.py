@@ -1,23 +1,29 @@
-"""Test doubles for the study machinery: a tiny scene, two tiny pipelines and NumPy metrics.
+"""Test doubles for the study machinery: a tiny scene, two tiny pipelines, a camera path
+and NumPy metrics.
 
 ``install(monkeypatch)`` puts them in place for one test (the registry entries and backend
 functions are restored afterwards), so the runner, store, cache and figures can be tested end
-to end in seconds, before (and independently of) the real scenes, pipelines and metrics.
+to end in seconds, independently of the real scenes, pipelines and metrics.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+import jaxrender.metrics
 from jaxrender.pipelines import registry
+from jaxrender.scene import camera_path
 from jaxrender.scene.camera import look_at
+from jaxrender.study import backend
 from jaxrender.types import Frame, pytree_dataclass, static_field
 
 FAKE_SCENES = ("tiny", "tiny2")
+REAL_METRICS = dict(jaxrender.metrics.METRICS)  # before any test replaces them
 
 
 @pytree_dataclass
@@ -111,20 +117,17 @@ def _np_metrics():
         di, dr = np.diff(np.asarray(i), axis=0), np.diff(np.asarray(r), axis=0)
         return float(np.mean(np.abs(di - dr)))
 
-    return dict(rmse=rmse, psnr=psnr, ssim=ssim, flip=flip, delta_e2000=delta_e2000,
-                temporal_error=temporal_error)
+    return dict(rmse=rmse, psnr=psnr, mssim=ssim, flip=lambda t, r: flip(r, t),
+                delta_e=delta_e2000, temporal_error=temporal_error)
 
 
-def fake_cameras(scene, path, width, height):
-    step = dict(path.params).get("step", 0.05) if path.type == "fakepan" else 0.0
-    return [look_at((step * t, 0.5, 3.0), (step * t, 0.0, 0.0)) for t in range(path.frames)]
+def fake_pan(camera, frames, width, height, *, step=0.05):
+    return [look_at((step * t, 0.5, 3.0), (step * t, 0.0, 0.0)) for t in range(frames)]
 
 
 def install(monkeypatch, *, metrics: bool = True):
-    """Register ``flat`` and ``reference`` (fakes) and fake scenes/paths for one test."""
-    import jaxrender.metrics
-    from jaxrender.study import backend
-
+    """Register ``flat`` and ``reference`` (fakes), fake scenes, the ``fakepan`` path and
+    (with ``metrics``) NumPy metrics for one test."""
     registry._load_builtin_pipelines()
     monkeypatch.setitem(registry.REGISTRY, "flat",
                         registry.Pipeline("flat", FlatConfig, registry.FrameStep(render_flat),
@@ -143,8 +146,9 @@ def install(monkeypatch, *, metrics: bool = True):
                         lambda: [(n, f"fake scene {n}") for n in FAKE_SCENES])
     monkeypatch.setattr(backend, "load_scene", load_scene)
     monkeypatch.setattr(backend, "default_camera", lambda scene: look_at((0, 0.5, 3), (0, 0, 0)))
-    monkeypatch.setattr(backend, "path_types", lambda: ["static", "fakepan"])
-    monkeypatch.setattr(backend, "make_cameras", fake_cameras)
+    monkeypatch.setitem(camera_path.PATH_TYPES, "fakepan", camera_path.PathType(
+        fake_pan, {"step": camera_path.PathParam(float, 0.05)}))
     if metrics:
         for name, fn in _np_metrics().items():
-            monkeypatch.setattr(jaxrender.metrics, name, fn, raising=False)
+            m = jaxrender.metrics.METRICS[name]
+            monkeypatch.setitem(jaxrender.metrics.METRICS, name, dataclasses.replace(m, fn=fn))
