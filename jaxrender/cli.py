@@ -130,10 +130,10 @@ def cmd_render(a) -> int:
     from jaxrender import timing
     from jaxrender.study import backend
     from jaxrender.study.runner import _py
-    from jaxrender.study.schema import _Checker, check_params
+    from jaxrender.study.schema import Checker, check_params
 
     w, h = a.resolution or (320, 180)
-    params = check_params(_Checker("--set"), "", a.pipeline, _parse_sets(a.set), (w, h))
+    params = check_params(Checker("--set"), "", a.pipeline, _parse_sets(a.set), (w, h))
     scene = backend.load_scene(a.scene, {})
     camera = backend.default_camera(scene)
     pipe = backend.pipeline(a.pipeline)

@@ -15,7 +15,7 @@ import itertools
 import json
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -37,16 +37,13 @@ FIGURES = (
 MAX_SIDE = 8192
 SSIM_MIN_SIDE = 11  # the 11-tap Gaussian window of Wang et al.
 
-_TOP_KEYS = {
-    "name", "description", "resolution", "frames", "metrics", "figures", "save_frames",
-    "scenes", "paths", "pipelines", "reference", "timing", "warmup_frames",
-}
-_SCENE_KEYS = {"name", "label", "params"}
-_PATH_KEYS = {"name", "preset", "type", "frames", "params", "description"}
-_PIPE_KEYS = {"type", "label", "preset", "params", "sweep", "sweep_mode", "description"}
-_PRESET_PIPE_KEYS = {"type", "params", "sweep", "sweep_mode", "description"}
-_REF_KEYS = {"pipeline", "params", "check_convergence", "min_margin_db"}
-_TIMING_KEYS = {"warmup", "repeats", "single_frame"}
+
+
+def _toml(default=dataclasses.MISSING, **meta):
+    """A spec field: ``lo`` bounds an integer, ``toml=False`` keeps it out of the file,
+    ``empty=True`` lets a string be empty, ``table=True`` wants a table, ``required=True``
+    must be given although the dataclass has a default (for field order)."""
+    return field(default=default, metadata=meta)
 
 
 # ------------------------------------------------------------------ the validated objects
@@ -55,17 +52,17 @@ _TIMING_KEYS = {"warmup", "repeats", "single_frame"}
 @dataclass(frozen=True)
 class SceneSpec:
     label: str  # the name rows use
-    source: str  # built-in scene name, or an absolute path to a scene TOML file
-    params: tuple[tuple[str, Any], ...] = ()
-    file_hash: str = ""  # sha256 of the scene file (empty for built-ins), for the cache key
+    source: str = _toml(toml=False)  # built-in name, or an absolute path to a scene TOML file
+    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
+    file_hash: str = _toml("", toml=False)  # sha256 of the scene file, for the cache key
 
 
 @dataclass(frozen=True)
 class PathSpec:
     name: str
     type: str
-    frames: int
-    params: tuple[tuple[str, Any], ...] = ()
+    frames: int = _toml(lo=1)
+    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
 
 
 @dataclass(frozen=True)
@@ -85,24 +82,24 @@ class Variant:
 class PipelineSpec:
     label: str
     type: str
-    params: tuple[tuple[str, Any], ...]
-    sweep: tuple[tuple[str, tuple], ...]
-    sweep_mode: str
-    variants: tuple[Variant, ...]
+    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
+    sweep: tuple[tuple[str, tuple], ...] = _toml((), table=True)
+    sweep_mode: str = "cartesian"
+    variants: tuple[Variant, ...] = _toml((), toml=False)
 
 
 @dataclass(frozen=True)
 class ReferenceSpec:
     pipeline: str = "reference"
-    params: tuple[tuple[str, Any], ...] = ()
+    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
     check_convergence: bool = True
     min_margin_db: float = 10.0
 
 
 @dataclass(frozen=True)
 class TimingSpec:
-    warmup: int = 1
-    repeats: int = 3
+    warmup: int = _toml(1, lo=0)
+    repeats: int = _toml(3, lo=1)
     # Also compile and time each variant's single-frame program (time_ms_single beside the
     # per-frame time in the sequence); false compiles one program per variant, not two.
     single_frame: bool = True
@@ -110,21 +107,21 @@ class TimingSpec:
 
 @dataclass(frozen=True)
 class Study:
-    file: str
-    name: str
-    description: str
-    resolution: tuple[int, int]  # (width, height)
-    scenes: tuple[SceneSpec, ...]
-    paths: tuple[PathSpec, ...]
-    pipelines: tuple[PipelineSpec, ...]
-    reference: ReferenceSpec
-    metrics: tuple[str, ...]
-    figures: tuple[str, ...]
-    save_frames: tuple[int, ...]
-    timing: TimingSpec
+    file: str = _toml(toml=False)
+    name: str = _toml("")
+    description: str = _toml("", empty=True)
+    resolution: tuple[int, int] = (320, 180)  # (width, height)
+    scenes: tuple[SceneSpec, ...] = _toml((), required=True)
+    paths: tuple[PathSpec, ...] = None
+    pipelines: tuple[PipelineSpec, ...] = _toml((), required=True)
+    reference: ReferenceSpec = _toml(None, table=True)
+    metrics: tuple[str, ...] = tuple(METRICS)
+    figures: tuple[str, ...] = FIGURES
+    save_frames: tuple[int, ...] = (0,)
+    timing: TimingSpec = _toml(None, table=True)
     # Frames rendered before the scored ones of every path (the path runs that much longer
     # and its first frames are dropped), so that temporal pipelines start with a warm history.
-    warmup_frames: int = 0
+    warmup_frames: int = _toml(0, lo=0)
 
     @property
     def variants(self) -> tuple[Variant, ...]:
@@ -182,8 +179,12 @@ def _type_name(v) -> str:
             list: "a list", dict: "a table"}.get(type(v), type(v).__name__)
 
 
-class _Checker:
-    """Small typed accessors that raise StudyError naming the file and the key path."""
+def _sub(path: str, key) -> str:
+    return f"{path}.{key}" if path else str(key)
+
+
+class Checker:
+    """Typed accessors that raise StudyError naming the file and the key path."""
 
     def __init__(self, file: str):
         self.file = file
@@ -196,18 +197,18 @@ class _Checker:
             self.fail(path, f"expected a table, got {_type_name(v)}")
         return v
 
-    def keys(self, d: dict, path: str, allowed: set, required=()):
+    def keys(self, d: dict, path: str, allowed, required=(), hint: str = ""):
         for k in d:
             if k not in allowed:
-                where = f"{path}.{k}" if path else k
-                self.fail(where, f"unknown key; allowed keys: {', '.join(sorted(allowed))}")
+                self.fail(_sub(path, k), f"unknown key; allowed keys: {', '.join(sorted(allowed))}")
         for k in required:
             if k not in d:
-                self.fail(path or "(top level)", f"missing required key {k!r}")
+                self.fail(path or "(top level)", f"missing required key {k!r}{hint}")
 
-    def str_(self, v, path) -> str:
-        if not isinstance(v, str) or not v:
-            self.fail(path, f"expected a non-empty string, got {_type_name(v)}")
+    def str_(self, v, path, empty=False) -> str:
+        if not isinstance(v, str) or not (v or empty):
+            self.fail(path, f"expected a {'' if empty else 'non-empty '}string, "
+                      f"got {_type_name(v)}")
         return v
 
     def int_(self, v, path, lo=None) -> int:
@@ -245,6 +246,42 @@ class _Checker:
             out.append(n)
         return tuple(out)
 
+    def value(self, v, path, kind, **meta):
+        """``v`` checked as a ``kind`` (a type or its name); tables and lists stay as read."""
+        kind = getattr(kind, "__name__", kind)
+        if kind == "bool":
+            return self.bool_(v, path)
+        if kind == "int":
+            return self.int_(v, path, meta.get("lo"))
+        if kind == "float":
+            return self.num(v, path)
+        if kind == "str":
+            return self.str_(v, path, meta.get("empty", False))
+        if meta.get("table"):
+            return dict(self.table(v, path))
+        return v
+
+
+def read_table(ck: Checker, raw, path: str, cls, *, extra=(), defaults=None, hint="") -> dict:
+    """The table ``raw`` read as the fields of spec dataclass ``cls`` (plus the TOML-only keys
+    ``extra``): unknown keys and missing required ones (no default here or in ``defaults``)
+    are errors; each value is checked against its field's type (integers with the field's
+    ``lo``, tables as tables); the rest stays as read, for the caller to resolve."""
+    fields = [f for f in dataclasses.fields(cls) if f.metadata.get("toml", True)]
+    raw = ck.table(raw if raw is not None else {}, path or "(top level)")
+    defaults = defaults or {}
+    missing = [f.name for f in fields if f.metadata.get("required") or (
+        f.name not in defaults and f.default is dataclasses.MISSING)]
+    ck.keys(raw, path, {f.name for f in fields} | set(extra), required=missing, hint=hint)
+    out = {}
+    for f in fields:
+        if f.name in raw:
+            out[f.name] = ck.value(raw[f.name], _sub(path, f.name), f.type, **f.metadata)
+        else:
+            empty = {} if f.metadata.get("table") and f.default == () else f.default
+            out[f.name] = defaults.get(f.name, empty)
+    return out | {k: raw[k] for k in extra if k in raw}
+
 
 def _read_toml(path: Path, shown: str) -> dict:
     try:
@@ -263,62 +300,62 @@ def _rel(path: Path) -> str:
         return str(path)
 
 
+def _frozen(params: dict) -> tuple:
+    return tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in params.items()))
+
+
+def with_preset(ck: Checker, item: dict, path: str, root: Path, cls, kind: str,
+                name_key: str, fixed=()) -> dict:
+    """A study entry merged over its preset ``configs/<kind>/<preset>.toml`` (the entry's
+    ``params`` and ``sweep`` tables merged key by key over the preset's; ``name_key`` defaults
+    to the preset's name). The preset's own mistakes are named in its file; a key in
+    ``fixed`` may not differ between the entry and its preset."""
+    if "preset" not in item:
+        return dict(item)
+    preset = ck.str_(item["preset"], f"{path}.preset")
+    pfile = root / "configs" / kind / f"{preset}.toml"
+    what = "camera path" if kind == "paths" else "pipeline"
+    if not pfile.is_file():
+        avail = sorted(p.stem for p in (root / "configs" / kind).glob("*.toml"))
+        ck.fail(f"{path}.preset", f"no {what} preset {preset!r} in configs/{kind}; "
+                f"available: {', '.join(avail) or '(none)'}")
+    pck = Checker(_rel(pfile))
+    merged = _read_toml(pfile, pck.file)
+    pck.keys(merged, "", _keys(cls, kind) - {"preset", name_key}, required=fixed)
+    for k in ("params", "sweep"):
+        if k in merged:
+            pck.table(merged[k], k)
+    for k in fixed:
+        if k in item and item[k] != merged[k]:
+            ck.fail(f"{path}.{k}", f"preset {preset!r} is a {merged[k]!r} {what}, "
+                    f"not {item[k]!r}")
+    merged.setdefault(name_key, preset)
+    for k, v in item.items():
+        if k in ("params", "sweep"):
+            merged[k] = {**merged.get(k, {}), **ck.table(v, f"{path}.{k}")}
+        elif k != "preset":
+            merged[k] = v
+    return merged
+
+
 # ------------------------------------------------------------------ parameter checking
 
 
-def _expected_kind(default):
-    if isinstance(default, bool):
-        return bool
-    if isinstance(default, int):
-        return int
-    if isinstance(default, float):
-        return float
-    if isinstance(default, str):
-        return str
-    if isinstance(default, tuple):
-        return tuple
-    return None
-
-
-def check_param(ck: _Checker, path: str, value, default, has_default: bool):
-    """``value`` from TOML checked against the config field's default; returns the value in
-    the field's type (lists become tuples, integers become floats for float fields)."""
-    if isinstance(value, dict):
-        ck.fail(path, "expected a value, got a table")
-    kind = _expected_kind(default) if has_default else None
-    if kind is None:
-        return tuple(value) if isinstance(value, list) else value
-    if kind is bool:
-        return ck.bool_(value, path)
-    if kind is int:
-        return ck.int_(value, path)
-    if kind is float:
-        return ck.num(value, path)
-    if kind is str:
-        return ck.str_(value, path)
-    if kind is tuple:
-        if not isinstance(value, list):
-            ck.fail(path, f"expected a list, got {_type_name(value)}")
-        return tuple(value)
-    return value
-
-
-def check_params(ck: _Checker, path: str, ptype: str, params: dict, resolution) -> dict:
-    """Parameters of pipeline ``ptype`` checked by name and type against its config class."""
+def check_params(ck: Checker, path: str, ptype: str, params: dict, resolution) -> dict:
+    """Parameters of pipeline ``ptype`` checked by name and type against its config class;
+    returns them in the fields' types (lists become tuples, integers floats for floats)."""
     pipe = backend.pipeline(ptype)
     fields = {f.name: f for f in dataclasses.fields(pipe.config_cls)}
     out = {}
     for k, v in params.items():
-        where = f"{path}.{k}" if path else k
+        where = _sub(path, k)
         if k in ("width", "height"):
             ck.fail(where, "the resolution is set for the whole study (`resolution`)")
         if k not in fields:
             known = ", ".join(sorted(f for f in fields if f not in ("width", "height")))
             ck.fail(where, f"pipeline {ptype!r} has no parameter {k!r}; "
                     f"its parameters are: {known or '(none)'}")
-        f = fields[k]
-        has_default = f.default is not dataclasses.MISSING
-        out[k] = check_param(ck, where, v, f.default if has_default else None, has_default)
+        out[k] = _check_value(ck, where, v, fields[k].default)
     try:
         backend.make_config(ptype, resolution[0], resolution[1], out)
     except (TypeError, ValueError, KeyError) as e:
@@ -326,229 +363,183 @@ def check_params(ck: _Checker, path: str, ptype: str, params: dict, resolution) 
     return out
 
 
+def _check_value(ck: Checker, path: str, value, default):
+    """A parameter checked against the type of its default (none: any value)."""
+    if isinstance(value, dict):
+        ck.fail(path, "expected a value, got a table")
+    if isinstance(default, tuple):
+        return tuple(ck.list_(value, path, nonempty=False))
+    if isinstance(default, (bool, int, float, str)):
+        return ck.value(value, path, type(default))
+    return tuple(value) if isinstance(value, list) else value
+
+
 # ------------------------------------------------------------------ sections
 
+_ENTRY_KEYS = {  # the keys a study's entries accept besides their spec's fields
+    "scenes": ("name",),
+    "paths": ("preset", "description"),
+    "pipelines": ("preset", "description"),
+}
 
-def _scenes(ck: _Checker, raw, root: Path, study_dir: Path) -> tuple[SceneSpec, ...]:
-    items = ck.list_(raw, "scenes")
-    builtins = None
-    out: list[SceneSpec] = []
-    for i, item in enumerate(items):
-        path = f"scenes[{i}]"
-        if isinstance(item, str):
-            item = {"name": item}
-        ck.table(item, path)
-        ck.keys(item, path, _SCENE_KEYS, required=("name",))
-        name = ck.str_(item["name"], f"{path}.name")
-        label = ck.str_(item.get("label", Path(name).stem), f"{path}.label")
-        params = dict(ck.table(item.get("params", {}), f"{path}.params"))
+
+def _scene(ck: Checker, item, path: str, root: Path, study_dir: Path) -> SceneSpec:
+    if isinstance(item, str):
+        item = {"name": item}
+    d = read_table(ck, item, path, SceneSpec, extra=_ENTRY_KEYS["scenes"],
+                   defaults={"label": None})
+    if "name" not in d:
+        ck.fail(path, "missing required key 'name'")
+    name = ck.str_(d["name"], f"{path}.name")
+    label = ck.str_(d["label"] or Path(name).stem, f"{path}.label")
+    params = dict(d["params"])
+    file = _scene_file(ck, name, path, root, study_dir)
+    for k, v in params.items():
+        if isinstance(v, (dict, list)) and not (isinstance(v, list) and v):
+            ck.fail(f"{path}.params.{k}", f"expected a value, got {_type_name(v)}")
+    sizes = backend.scene_params(name) if file is None else None
+    if sizes is not None:
         for k, v in params.items():
-            if isinstance(v, (dict, list)) and not (isinstance(v, list) and v):
-                ck.fail(f"{path}.params.{k}", f"expected a value, got {_type_name(v)}")
-        file = None
-        if name.endswith(".toml") or "/" in name:
-            for cand in (study_dir / name, root / name):
-                if cand.is_file():
-                    file = cand.resolve()
-                    break
-            if file is None:
-                ck.fail(f"{path}.name", f"scene file {name!r} not found")
-        elif (root / "configs" / "scenes" / f"{name}.toml").is_file():
-            file = (root / "configs" / "scenes" / f"{name}.toml").resolve()
+            if k not in sizes:
+                ck.fail(f"{path}.params.{k}", f"scene {name!r} has no size parameter {k!r}; "
+                        f"its parameters are: {', '.join(sizes) or '(none)'}")
+            params[k] = _check_value(ck, f"{path}.params.{k}", v, sizes[k])
+    elif file is not None and params:
+        ck.fail(f"{path}.params", "size parameters apply to built-in scenes only")
+    digest = hashlib.sha256(file.read_bytes()).hexdigest() if file else ""
+    return SceneSpec(label, str(file) if file else name, _frozen(params), digest)
+
+
+def _scene_file(ck: Checker, name: str, path: str, root: Path, study_dir: Path):
+    """The scene file ``name`` names, or None for a built-in scene."""
+    scenes_dir = root / "configs" / "scenes"
+    if name.endswith(".toml") or "/" in name:
+        for cand in (study_dir / name, root / name):
+            if cand.is_file():
+                return cand.resolve()
+        ck.fail(f"{path}.name", f"scene file {name!r} not found")
+    if (scenes_dir / f"{name}.toml").is_file():
+        return (scenes_dir / f"{name}.toml").resolve()
+    builtins = backend.builtin_scene_names()
+    if name not in builtins:
+        files = sorted(p.stem for p in scenes_dir.glob("*.toml"))
+        ck.fail(f"{path}.name", f"unknown scene {name!r}; built-in scenes: "
+                f"{', '.join(builtins) or '(none)'}; scene files in configs/scenes: "
+                f"{', '.join(files) or '(none)'}")
+    return None
+
+
+def _path(ck: Checker, item, path: str, root: Path, default_frames: int) -> PathSpec:
+    if isinstance(item, str):
+        item = {"preset": item}
+    ck.keys(ck.table(item, path), path, _keys(PathSpec, "paths"))
+    merged = with_preset(ck, item, path, root, PathSpec, "paths", "name")
+    d = read_table(ck, merged, path, PathSpec, extra=_ENTRY_KEYS["paths"],
+                   defaults={"name": None, "frames": default_frames},
+                   hint=" (or a 'preset' that sets it)")
+    ptype = d["type"]
+    if ptype not in PATH_TYPES:
+        ck.fail(f"{path}.type", f"unknown camera path type {ptype!r}; known: "
+                f"{', '.join(PATH_TYPES)}")
+    name = ck.str_(d["name"] or ptype, f"{path}.name")
+    params = d["params"]
+    declared = PATH_TYPES[ptype].params
+    for k, v in params.items():
+        where = f"{path}.params.{k}"
+        if k not in declared:
+            ck.fail(where, f"camera path {ptype!r} has no parameter {k!r}; its parameters "
+                    f"are: {', '.join(declared) or '(none)'}")
+        if declared[k].kind is tuple:
+            if not (isinstance(v, list) and len(v) == 3 and all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
+                ck.fail(where, "expected a list of 3 numbers")
         else:
-            if builtins is None:
-                builtins = backend.builtin_scene_names()
-            if name not in builtins:
-                files = sorted(p.stem for p in (root / "configs" / "scenes").glob("*.toml"))
-                ck.fail(f"{path}.name", f"unknown scene {name!r}; built-in scenes: "
-                        f"{', '.join(builtins) or '(none)'}; scene files in configs/scenes: "
-                        f"{', '.join(files) or '(none)'}")
-        if file is None:
-            sizes = backend.scene_params(name)
-            if sizes is not None:
-                for k, v in list(params.items()):
-                    if k not in sizes:
-                        ck.fail(f"{path}.params.{k}", f"scene {name!r} has no size parameter "
-                                f"{k!r}; its parameters are: {', '.join(sizes) or '(none)'}")
-                    params[k] = check_param(ck, f"{path}.params.{k}", v, sizes[k], True)
-        elif params:
-            ck.fail(f"{path}.params", "size parameters apply to built-in scenes only")
-        if any(s.label == label for s in out):
-            ck.fail(f"{path}.label", f"scene label {label!r} is used twice; set `label`")
-        frozen = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)
-                              for k, v in params.items()))
-        digest = hashlib.sha256(file.read_bytes()).hexdigest() if file else ""
-        out.append(SceneSpec(label, str(file) if file else name, frozen, digest))
-    return tuple(out)
+            params[k] = ck.value(v, where, declared[k].kind)
+    for k, p in declared.items():
+        if p.default is REQUIRED and k not in params:
+            ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
+    return PathSpec(name, ptype, d["frames"], _frozen(params))
 
 
-def _paths(ck: _Checker, raw, root: Path, default_frames: int) -> tuple[PathSpec, ...]:
-    if raw is None:
-        return (PathSpec("static", "static", default_frames),)
-    items = ck.list_(raw, "paths")
-    known = list(PATH_TYPES)
-    out: list[PathSpec] = []
-    for i, item in enumerate(items):
-        path = f"paths[{i}]"
-        if isinstance(item, str):
-            item = {"preset": item}
-        ck.table(item, path)
-        ck.keys(item, path, _PATH_KEYS)
-        merged: dict = {}
-        if "preset" in item:
-            preset = ck.str_(item["preset"], f"{path}.preset")
-            pfile = root / "configs" / "paths" / f"{preset}.toml"
-            if not pfile.is_file():
-                avail = sorted(p.stem for p in (root / "configs" / "paths").glob("*.toml"))
-                ck.fail(f"{path}.preset", f"no camera path preset {preset!r} in configs/paths; "
-                        f"available: {', '.join(avail) or '(none)'}")
-            pck = _Checker(_rel(pfile))
-            pdata = _read_toml(pfile, pck.file)
-            pck.keys(pdata, "", _PATH_KEYS - {"preset", "name"})
-            merged.update(pdata)
-            merged.setdefault("name", preset)
-            merged["params"] = {**pdata.get("params", {}), **item.get("params", {})}
-        merged.update({k: v for k, v in item.items() if k not in ("preset", "params")})
-        merged.setdefault("params", item.get("params", {}))
-        if "type" not in merged:
-            ck.fail(path, "missing required key 'type' (or a 'preset' that sets it)")
-        ptype = ck.str_(merged["type"], f"{path}.type")
-        if ptype not in known:
-            ck.fail(f"{path}.type", f"unknown camera path type {ptype!r}; known: "
-                    f"{', '.join(known)}")
-        name = ck.str_(merged.get("name", ptype), f"{path}.name")
-        frames = ck.int_(merged.get("frames", default_frames), f"{path}.frames", lo=1)
-        params = dict(ck.table(merged["params"], f"{path}.params"))
-        for k, v in params.items():
-            if isinstance(v, dict):
-                ck.fail(f"{path}.params.{k}", "expected a value, got a table")
-        spec = PATH_TYPES[ptype].params
-        if spec is not None:
-            for k, v in params.items():
-                if k not in spec:
-                    ck.fail(f"{path}.params.{k}", f"camera path {ptype!r} has no parameter "
-                            f"{k!r}; its parameters are: {', '.join(spec) or '(none)'}")
-                kind = spec[k].kind
-                if kind is float:
-                    params[k] = ck.num(v, f"{path}.params.{k}")
-                elif kind is str:
-                    params[k] = ck.str_(v, f"{path}.params.{k}")
-                elif kind is tuple and not (isinstance(v, list) and len(v) == 3 and all(
-                        isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
-                    ck.fail(f"{path}.params.{k}", "expected a list of 3 numbers")
-            for k, p in spec.items():
-                if p.default is REQUIRED and k not in params:
-                    ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
-        if any(p.name == name for p in out):
-            ck.fail(f"{path}.name", f"camera path name {name!r} is used twice")
-        frozen = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)
-                              for k, v in params.items()))
-        out.append(PathSpec(name, ptype, frames, frozen))
-    return tuple(out)
+def _keys(cls, kind: str) -> set:
+    return {f.name for f in dataclasses.fields(cls) if f.metadata.get("toml", True)} | set(
+        _ENTRY_KEYS[kind])
 
 
 def _variants(ck, path, label, ptype, fixed: dict, sweep: dict, mode: str) -> tuple:
-    names = list(sweep)
-    if not names:
-        combos = [()]
-    elif mode == "zip":
+    if mode == "zip":
         lengths = {k: len(v) for k, v in sweep.items()}
         if len(set(lengths.values())) > 1:
             desc = ", ".join(f"{k} has {n}" for k, n in lengths.items())
             ck.fail(f"{path}.sweep", f"zip needs lists of equal length; {desc}")
-        combos = list(zip(*sweep.values()))
+        combos = list(zip(*sweep.values())) if sweep else [()]
     else:
         combos = list(itertools.product(*sweep.values()))
-    out = []
-    for combo in combos:
-        params = {**fixed, **dict(zip(names, combo))}
-        out.append(Variant(label, ptype, tuple(sorted(params.items()))))
-    return tuple(out)
+    return tuple(Variant(label, ptype, tuple(sorted({**fixed, **dict(zip(sweep, c))}.items())))
+                 for c in combos)
 
 
-def _pipelines(ck: _Checker, raw, root: Path, resolution) -> tuple[PipelineSpec, ...]:
-    items = ck.list_(raw, "pipelines")
-    out: list[PipelineSpec] = []
-    for i, item in enumerate(items):
-        path = f"pipelines[{i}]"
-        ck.table(item, path)
-        ck.keys(item, path, _PIPE_KEYS)
-        merged: dict = {}
-        if "preset" in item:
-            preset = ck.str_(item["preset"], f"{path}.preset")
-            pfile = root / "configs" / "pipelines" / f"{preset}.toml"
-            if not pfile.is_file():
-                avail = sorted(p.stem for p in (root / "configs" / "pipelines").glob("*.toml"))
-                ck.fail(f"{path}.preset", f"no pipeline preset {preset!r} in configs/pipelines; "
-                        f"available: {', '.join(avail) or '(none)'}")
-            pck = _Checker(_rel(pfile))
-            pdata = _read_toml(pfile, pck.file)
-            pck.keys(pdata, "", _PRESET_PIPE_KEYS, required=("type",))
-            pck.table(pdata.get("params", {}), "params")
-            pck.table(pdata.get("sweep", {}), "sweep")
-            if "type" in item and item["type"] != pdata["type"]:
-                ck.fail(f"{path}.type", f"preset {preset!r} is a {pdata['type']!r} pipeline, "
-                        f"not {item['type']!r}")
-            merged = dict(pdata)
-            merged.setdefault("label", preset)
-        for k, v in item.items():
-            if k in ("params", "sweep") and k in merged:
-                merged[k] = {**merged[k], **ck.table(v, f"{path}.{k}")}
-            elif k != "preset":
-                merged[k] = v
-        if "type" not in merged:
-            ck.fail(path, "missing required key 'type' (or a 'preset' that sets it)")
-        ptype = ck.str_(merged["type"], f"{path}.type")
-        if ptype not in backend.registered_pipelines():
-            known = ", ".join(backend.registered_pipelines()) or "(none yet)"
-            ck.fail(f"{path}.type", f"pipeline {ptype!r} is not registered; registered: {known}")
-        label = ck.str_(merged.get("label", ptype), f"{path}.label")
-        if any(p.label == label for p in out):
-            ck.fail(f"{path}.label", f"pipeline label {label!r} is used twice; give each entry "
-                    "a distinct `label`")
-        mode = ck.str_(merged.get("sweep_mode", "cartesian"), f"{path}.sweep_mode")
-        if mode not in ("cartesian", "zip"):
-            ck.fail(f"{path}.sweep_mode", f"expected 'cartesian' or 'zip', got {mode!r}")
-        fixed = check_params(ck, f"{path}.params", ptype,
-                             ck.table(merged.get("params", {}), f"{path}.params"), resolution)
-        sweep_raw = ck.table(merged.get("sweep", {}), f"{path}.sweep")
-        sweep: dict = {}
-        for k, values in sweep_raw.items():
-            if k in fixed:
-                ck.fail(f"{path}.sweep.{k}", f"{k!r} is both a fixed parameter and swept")
-            if not isinstance(values, list) or not values:
-                ck.fail(f"{path}.sweep.{k}", "expected a non-empty list of values to sweep")
-            checked = [check_params(ck, f"{path}.sweep", ptype, {k: v}, resolution)[k]
-                       for v in values]
-            sweep[k] = tuple(checked)
-            if len(set(map(repr, checked))) != len(checked):
-                ck.fail(f"{path}.sweep.{k}", "a swept value is listed twice")
-        variants = _variants(ck, path, label, ptype, fixed, sweep, mode)
-        for v in variants:
-            try:
-                backend.make_config(ptype, resolution[0], resolution[1], dict(v.params))
-            except (TypeError, ValueError, KeyError) as e:
-                ck.fail(f"{path}.sweep", f"pipeline {ptype!r} rejects {v.params_json}: {e}")
-        out.append(PipelineSpec(label, ptype, tuple(sorted(fixed.items())),
-                                tuple(sweep.items()), mode, variants))
-    return tuple(out)
+def _pipeline_type(ck: Checker, ptype: str, where: str) -> str:
+    if ptype not in backend.registered_pipelines():
+        known = ", ".join(backend.registered_pipelines()) or "(none)"
+        ck.fail(where, f"pipeline {ptype!r} is not registered; registered: {known}")
+    return ptype
 
 
-def _reference(ck: _Checker, raw, resolution) -> ReferenceSpec:
-    raw = ck.table(raw if raw is not None else {}, "reference")
-    ck.keys(raw, "reference", _REF_KEYS)
-    pipe = ck.str_(raw.get("pipeline", "reference"), "reference.pipeline")
-    if pipe not in backend.registered_pipelines():
-        known = ", ".join(backend.registered_pipelines()) or "(none yet)"
-        ck.fail("reference.pipeline", f"pipeline {pipe!r} is not registered; registered: {known}")
-    params = check_params(ck, "reference.params", pipe,
-                          ck.table(raw.get("params", {}), "reference.params"), resolution)
-    return ReferenceSpec(
-        pipe,
-        tuple(sorted(params.items())),
-        ck.bool_(raw.get("check_convergence", True), "reference.check_convergence"),
-        ck.num(raw.get("min_margin_db", 10.0), "reference.min_margin_db"),
-    )
+def _sweep(ck: Checker, path: str, ptype: str, raw: dict, fixed: dict, resolution) -> dict:
+    sweep: dict = {}
+    for k, values in raw.items():
+        if k in fixed:
+            ck.fail(f"{path}.sweep.{k}", f"{k!r} is both a fixed parameter and swept")
+        if not isinstance(values, list) or not values:
+            ck.fail(f"{path}.sweep.{k}", "expected a non-empty list of values to sweep")
+        checked = [check_params(ck, f"{path}.sweep", ptype, {k: v}, resolution)[k]
+                   for v in values]
+        if len(set(map(repr, checked))) != len(checked):
+            ck.fail(f"{path}.sweep.{k}", "a swept value is listed twice")
+        sweep[k] = tuple(checked)
+    return sweep
+
+
+def _pipeline(ck: Checker, item, path: str, root: Path, resolution) -> PipelineSpec:
+    ck.keys(ck.table(item, path), path, _keys(PipelineSpec, "pipelines"))
+    merged = with_preset(ck, item, path, root, PipelineSpec, "pipelines", "label",
+                         fixed=("type",))
+    d = read_table(ck, merged, path, PipelineSpec, extra=_ENTRY_KEYS["pipelines"],
+                   defaults={"label": None}, hint=" (or a 'preset' that sets it)")
+    ptype = _pipeline_type(ck, d["type"], f"{path}.type")
+    label = ck.str_(d["label"] or ptype, f"{path}.label")
+    mode = d["sweep_mode"]
+    if mode not in ("cartesian", "zip"):
+        ck.fail(f"{path}.sweep_mode", f"expected 'cartesian' or 'zip', got {mode!r}")
+    fixed = check_params(ck, f"{path}.params", ptype, dict(d["params"]), resolution)
+    sweep = _sweep(ck, path, ptype, dict(d["sweep"]), fixed, resolution)
+    variants = _variants(ck, path, label, ptype, fixed, sweep, mode)
+    for v in variants:
+        try:
+            backend.make_config(ptype, resolution[0], resolution[1], dict(v.params))
+        except (TypeError, ValueError, KeyError) as e:
+            ck.fail(f"{path}.sweep", f"pipeline {ptype!r} rejects {v.params_json}: {e}")
+    return PipelineSpec(label, ptype, tuple(sorted(fixed.items())), tuple(sweep.items()),
+                        mode, variants)
+
+
+def _reference(ck: Checker, raw, resolution) -> ReferenceSpec:
+    d = read_table(ck, raw, "reference", ReferenceSpec)
+    pipe = _pipeline_type(ck, d["pipeline"], "reference.pipeline")
+    params = check_params(ck, "reference.params", pipe, dict(d["params"]), resolution)
+    return ReferenceSpec(pipe, tuple(sorted(params.items())), d["check_convergence"],
+                         d["min_margin_db"])
+
+
+def _unique(ck: Checker, specs, attr: str, section: str, what: str, fix: str = ""):
+    seen = set()
+    for i, s in enumerate(specs):
+        v = getattr(s, attr)
+        if v in seen:
+            ck.fail(f"{section}[{i}].{attr}", f"{what} {v!r} is used twice{fix}")
+        seen.add(v)
+    return tuple(specs)
 
 
 # ------------------------------------------------------------------ entry points
@@ -557,46 +548,48 @@ def _reference(ck: _Checker, raw, resolution) -> ReferenceSpec:
 def load_study(file, *, config_root: Path | None = None) -> Study:
     """Read and validate a study file; StudyError names the file and key on any mistake."""
     p = Path(file)
-    shown = str(file)
-    data = _read_toml(p, shown)
-    return parse_study(data, shown, study_dir=p.resolve().parent, config_root=config_root)
+    data = _read_toml(p, str(file))
+    return parse_study(data, str(file), study_dir=p.resolve().parent, config_root=config_root)
 
 
 def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | None = None):
-    ck = _Checker(file)
+    ck = Checker(file)
     root = config_root or find_config_root(study_dir)
-    ck.keys(data, "", _TOP_KEYS, required=("scenes", "pipelines"))
-    name = ck.str_(data.get("name", Path(file).stem), "name")
-    if not all(c.isalnum() or c in "-_." for c in name):
-        ck.fail("name", f"use letters, digits, '-', '_' or '.', got {name!r}")
-    description = data.get("description", "")
-    if not isinstance(description, str):
-        ck.fail("description", f"expected a string, got {_type_name(description)}")
+    d = read_table(ck, data, "", Study, extra={"frames": 1},
+                   defaults={"name": Path(file).stem, "metrics": list(METRICS),
+                             "figures": list(FIGURES), "save_frames": [0]})
+    if not all(c.isalnum() or c in "-_." for c in d["name"]):
+        ck.fail("name", f"use letters, digits, '-', '_' or '.', got {d['name']!r}")
     try:
-        resolution = parse_resolution(data.get("resolution", [320, 180]), "resolution")
+        resolution = parse_resolution(d["resolution"], "resolution")
     except UserError as e:
         raise StudyError(file, "resolution", str(e).split(": ", 1)[1]) from None
     frames = ck.int_(data.get("frames", 1), "frames", lo=1)
-    metrics = ck.names(data.get("metrics", list(METRICS)), "metrics", tuple(METRICS))
+    metrics = ck.names(d["metrics"], "metrics", tuple(METRICS))
     if "mssim" in metrics and min(resolution) < SSIM_MIN_SIDE:
         ck.fail("resolution", f"MSSIM needs images of at least {SSIM_MIN_SIDE}x{SSIM_MIN_SIDE} "
                 f"pixels (its window); drop 'mssim' from metrics or raise the resolution")
-    figures = ck.names(data.get("figures", list(FIGURES)), "figures", FIGURES)
-    save = ck.list_(data.get("save_frames", [0]), "save_frames", nonempty=False)
+    figures = ck.names(d["figures"], "figures", FIGURES)
+    save = ck.list_(d["save_frames"], "save_frames", nonempty=False)
     save_frames = tuple(sorted({ck.int_(v, f"save_frames[{i}]", lo=0)
                                 for i, v in enumerate(save)}))
-    timing_raw = ck.table(data.get("timing", {}), "timing")
-    ck.keys(timing_raw, "timing", _TIMING_KEYS)
-    timing = TimingSpec(ck.int_(timing_raw.get("warmup", 1), "timing.warmup", lo=0),
-                        ck.int_(timing_raw.get("repeats", 3), "timing.repeats", lo=1),
-                        ck.bool_(timing_raw.get("single_frame", True), "timing.single_frame"))
-    scenes = _scenes(ck, data["scenes"], root, study_dir)
-    paths = _paths(ck, data.get("paths"), root, frames)
-    pipelines = _pipelines(ck, data["pipelines"], root, resolution)
-    reference = _reference(ck, data.get("reference"), resolution)
-    warmup_frames = ck.int_(data.get("warmup_frames", 0), "warmup_frames", lo=0)
-    return Study(file, name, description, resolution, scenes, paths, pipelines, reference,
-                 metrics, figures, save_frames, timing, warmup_frames)
+    timing = TimingSpec(**read_table(ck, d["timing"], "timing", TimingSpec))
+    scenes = _unique(ck, [_scene(ck, item, f"scenes[{i}]", root, study_dir) for i, item in
+                          enumerate(ck.list_(d["scenes"], "scenes"))],
+                     "label", "scenes", "scene label", "; set `label`")
+    if d["paths"] is None:
+        paths = (PathSpec("static", "static", frames),)
+    else:
+        paths = _unique(ck, [_path(ck, item, f"paths[{i}]", root, frames) for i, item in
+                             enumerate(ck.list_(d["paths"], "paths"))],
+                        "name", "paths", "camera path name")
+    pipelines = _unique(ck, [_pipeline(ck, item, f"pipelines[{i}]", root, resolution)
+                             for i, item in enumerate(ck.list_(d["pipelines"], "pipelines"))],
+                        "label", "pipelines", "pipeline label",
+                        "; give each entry a distinct `label`")
+    reference = _reference(ck, d["reference"], resolution)
+    return Study(file, d["name"], d["description"], resolution, scenes, paths, pipelines,
+                 reference, metrics, figures, save_frames, timing, d["warmup_frames"])
 
 
 # ------------------------------------------------------------------ the resolved config

@@ -125,6 +125,16 @@ def fake_pan(camera, frames, width, height, *, step=0.05):
     return [look_at((step * t, 0.5, 3.0), (step * t, 0.0, 0.0)) for t in range(frames)]
 
 
+FAKEPAN = camera_path.PathType(fake_pan, {"step": camera_path.PathParam(float, 0.05)})
+
+
+def make_cameras(scene, path, width, height):
+    """The fake scenes' cameras (``static``: the fake default camera), in any process: a
+    compile worker receives this function by reference, without the test's monkeypatch."""
+    params = dict(path.params) if path.type == "fakepan" else {"step": 0.0}
+    return fake_pan(None, path.frames, width, height, **params)
+
+
 def install(monkeypatch, *, metrics: bool = True):
     """Register ``flat`` and ``reference`` (fakes), fake scenes, the ``fakepan`` path and
     (with ``metrics``) NumPy metrics for one test."""
@@ -146,8 +156,8 @@ def install(monkeypatch, *, metrics: bool = True):
                         lambda: [(n, f"fake scene {n}") for n in FAKE_SCENES])
     monkeypatch.setattr(backend, "load_scene", load_scene)
     monkeypatch.setattr(backend, "default_camera", lambda scene: look_at((0, 0.5, 3), (0, 0, 0)))
-    monkeypatch.setitem(camera_path.PATH_TYPES, "fakepan", camera_path.PathType(
-        fake_pan, {"step": camera_path.PathParam(float, 0.05)}))
+    monkeypatch.setitem(camera_path.PATH_TYPES, "fakepan", FAKEPAN)
+    monkeypatch.setattr(backend, "make_cameras", make_cameras)
     if metrics:
         for name, fn in _np_metrics().items():
             m = jaxrender.metrics.METRICS[name]
