@@ -43,16 +43,17 @@ def _positive(text: str) -> int:
 
 
 def cmd_study(a) -> int:
-    from jaxrender.study.runner import run_study
-    from jaxrender.study.schema import load_study
+    from jaxrender.figures import draw_run_figures
+    from jaxrender.study import load_study, run_study
 
     study = load_study(a.file).with_overrides(frames=a.frames, resolution=a.resolution)
     out = Path(a.out) if a.out else Path("runs") / study.name
     print(f"study {study.name}: {len(study.scenes)} scene(s), {len(study.paths)} camera "
           f"path(s), {len(study.variants)} pipeline variant(s) at {study.resolution[0]}x"
           f"{study.resolution[1]} -> {out}")
-    run_study(study, out, force=a.force, progress=not a.no_progress,
-                    figures=not a.no_figures)
+    result = run_study(study, out, force=a.force, progress=not a.no_progress)
+    if not a.no_figures:
+        draw_run_figures(result)
     print(f"results: {out / 'results.csv'}")
     return 0
 
@@ -129,7 +130,7 @@ def cmd_render(a) -> int:
     from jaxrender.figures.io import to_display
     from jaxrender import timing
     from jaxrender.study import backend
-    from jaxrender.study.runner import _py
+    from jaxrender.study.store import json_number
     from jaxrender.study.schema import Checker, check_params
 
     w, h = a.resolution or (320, 180)
@@ -146,7 +147,7 @@ def cmd_render(a) -> int:
     out = Path(a.output)
     out.parent.mkdir(parents=True, exist_ok=True)
     matplotlib.image.imsave(out, to_display(img))
-    counts = {k: _py(v) for k, v in (frame.counts or {}).items()}
+    counts = {k: json_number(v) for k, v in (frame.counts or {}).items()}
     counts = {k: v for k, v in counts.items() if v is not None}
     if a.json:
         print(json.dumps({"image": str(out), "scene": a.scene, "pipeline": a.pipeline,
@@ -160,7 +161,7 @@ def cmd_render(a) -> int:
 
 
 def cmd_reference(a) -> int:
-    from jaxrender.study import cache
+    from jaxrender.study import cache, references
 
     if a.action == "clear":
         n = cache.clear()
@@ -171,7 +172,7 @@ def cmd_reference(a) -> int:
         from jaxrender.study.schema import load_study
 
         study = load_study(a.study).with_overrides(frames=a.frames, resolution=a.resolution)
-        n = cache.rebuild(study)
+        n = references.rebuild(study)
         print(f"rebuilt {n} reference frame(s) in {cache.cache_dir()}")
     return 0
 

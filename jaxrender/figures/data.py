@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from jaxrender.study import store
+from jaxrender.study.summary import SUMMARY_COLUMNS, summarize
 
 # aux names a pipeline may put in Frame.aux for the figures, in order of preference
 DACS_LEVEL_KEYS = ("level", "dacs_level", "decision_level")
@@ -173,8 +174,6 @@ def image_grid_panels(run: Run, max_entries: int = 8) -> list[tuple[str, dict]]:
             entries.append({"label": variant_name(m["pipeline"], m["params"]),
                             "image": a["image"].astype(np.float32), "error": err,
                             "caption": f"PSNR {q:.2f} dB" if _num(q) else ""})
-        from jaxrender.study.runner import hardest_crop
-
         total = np.sum(errs, axis=0)
         h, w = total.shape
         crop = hardest_crop(total, max(8, min(h, w) // 4))
@@ -183,6 +182,16 @@ def image_grid_panels(run: Run, max_entries: int = 8) -> list[tuple[str, dict]]:
             "title": f"{scene} / {path}, frame {frame}", "device": run.device,
             "reference": ref, "crop": crop, "error_max": emax, "entries": entries}))
     return out
+
+
+def hardest_crop(error: np.ndarray, size: int) -> tuple[int, int, int, int]:
+    """(y0, x0, h, w) of the size x size window with the largest summed error."""
+    h, w = error.shape
+    s = max(1, min(size, h, w))
+    ii = np.pad(np.cumsum(np.cumsum(error.astype(np.float64), 0), 1), ((1, 0), (1, 0)))
+    sums = ii[s:, s:] - ii[:-s, s:] - ii[s:, :-s] + ii[:-s, :-s]
+    y0, x0 = np.unravel_index(int(np.argmax(sums)), sums.shape)
+    return int(y0), int(x0), s, s
 
 
 def _first(arrays: dict, keys):
@@ -247,8 +256,6 @@ def waves_tables(run: Run) -> list[tuple[str, dict]]:
 
 
 def summary_table(run: Run) -> dict:
-    from jaxrender.study.runner import SUMMARY_COLUMNS, summarize
-
     summ = summarize(run.rows)
     return {"title": "summary (mean over scenes, paths and frames)", "device": run.device,
             "columns": ["pipeline", "PSNR", "MSSIM", "FLIP", "temporal", "invocations",

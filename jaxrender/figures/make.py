@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -61,4 +62,13 @@ def render_figures(run_dir, names=FIGURES, *, out_dir=None, log=print,
     for paths in parallel.draw(jobs, parallel.worker_count(len(jobs), workers)):
         made += paths
     log(f"{len(made) // 2} figure(s) in {out_dir}")
+    return made
+
+
+def draw_run_figures(result, *, log=print, workers: int | None = None) -> list[Path]:
+    """The figures a finished run names (a ``study.RunResult``: its ``out_dir`` and
+    ``figures``), drawn into RUN_DIR/figures; returns the written files."""
+    t0 = time.perf_counter()
+    made = render_figures(result.out_dir, result.figures, log=log, workers=workers)
+    log(f"figures drawn in {time.perf_counter() - t0:.1f} s")
     return made

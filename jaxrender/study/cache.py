@@ -6,7 +6,7 @@ jaxrender``), subfolder ``reference/``. One ``.npz`` per frame, keyed by a hash 
 pipeline and its settings, the resolution and the code version (package version plus a hash of
 the source files of raster/, shading/, scene/ and pipelines/). Files are written to a temporary
 name, fsync'd and renamed, so a reader never sees half a file. ``jaxrender reference rebuild``
-re-renders the entries of a study; ``jaxrender reference clear`` empties the cache.
+re-renders the entries of a study (``references.rebuild``); ``jaxrender reference clear`` empties the cache.
 """
 
 from __future__ import annotations
@@ -123,19 +123,3 @@ def info(root: Path | None = None) -> dict:
     files = list(d.glob("*.npz")) if d.exists() else []
     return {"path": str(d), "entries": len(files),
             "bytes": sum(f.stat().st_size for f in files), "code_version": code_version()}
-
-
-def rebuild(study, *, log=print) -> int:
-    """Re-render every reference frame a study needs; returns the number of frames."""
-    from jaxrender.study.runner import _scene_and_cameras, reference_frames
-
-    n = 0
-    for spec in study.scenes:
-        for path in study.paths:
-            scene, cams = _scene_and_cameras(spec, path, study.resolution)
-            for cam in cams:
-                remove(reference_key(spec, cam, study.reference, study.resolution))
-            reference_frames(scene, spec, cams, study.reference, study.resolution)
-            n += len(cams)
-            log(f"rebuilt {len(cams)} reference frame(s): {spec.label} / {path.name}")
-    return n

@@ -15,11 +15,14 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import json
 import math
 import os
 import warnings
 from pathlib import Path
+
+import numpy as np
 
 CSV_COLUMNS = (
     "scene", "camera_path", "pipeline", "params", "frame",
@@ -27,6 +30,19 @@ CSV_COLUMNS = (
     "shade_invocations", "helper_lanes", "covered_pixels", "time_ms",
     "compile_ms", "pipeline_type", "width", "height", "finite", "device", "jax_version", "seq",
 )
+
+
+def json_number(v):
+    """A count as a plain JSON number (None when it is not a scalar)."""
+    a = np.asarray(v)
+    if a.size != 1:
+        return None
+    x = a.reshape(()).item()
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, int):
+        return int(x)
+    return float(x)
 
 
 def seq_key(*parts) -> str:
@@ -136,8 +152,6 @@ def export_csv(rows: list[dict], path) -> None:
     rows = sorted(rows, key=lambda r: (str(r.get("scene")), str(r.get("camera_path")),
                                        str(r.get("pipeline")), json.dumps(r.get("params"),
                                        sort_keys=True), r.get("frame", 0)))
-    import io
-
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(cols)

@@ -38,9 +38,8 @@ NAMES = ("image_grid", "temporal", "pareto_time")
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
+    from jaxrender.study import load_study, run_study
     from tests.study import doubles
-    from jaxrender.study.runner import run_study
-    from jaxrender.study.schema import load_study
 
     root = tmp_path_factory.mktemp("figs")
     (root / "configs").mkdir()
@@ -48,7 +47,7 @@ def run_dir(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("JAXRENDER_CACHE", str(root / "cache"))
         doubles.install(mp)
-        run_study(load_study(root / "figs.toml"), root / "run", progress=False, figures=False,
+        run_study(load_study(root / "figs.toml"), root / "run", progress=False,
                   log=lambda s: None)
     return root / "run"
 

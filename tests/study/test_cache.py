@@ -3,7 +3,7 @@
 import numpy as np
 
 from jaxrender.scene.camera import look_at
-from jaxrender.study import cache
+from jaxrender.study import cache, references
 from jaxrender.study.schema import ReferenceSpec, SceneSpec
 
 SCENE = SceneSpec("tiny", "tiny", (("n", 2),))
@@ -51,7 +51,7 @@ def test_rebuild_rerenders(fake, tiny_study, monkeypatch):
     real = cache.save
     monkeypatch.setattr(cache, "save", lambda key, arrays: saved.append(key) or real(key, arrays))
     study = load_study(tiny_study)
-    assert cache.rebuild(study, log=lambda m: None) == 6
+    assert references.rebuild(study, log=lambda m: None) == 6
     assert len(set(saved)) == 6 and len(list(cache.cache_dir().glob("*.npz"))) == 6
-    cache.rebuild(study, log=lambda m: None)
+    references.rebuild(study, log=lambda m: None)
     assert len(saved) == 12 and set(saved[6:]) == set(saved[:6])  # every frame re-rendered

@@ -9,7 +9,7 @@ import jax
 import numpy as np
 import pytest
 
-from jaxrender.study import backend, compile_pool, runner
+from jaxrender.study import backend, compile_pool, programs
 from tests.study import doubles
 from jaxrender.study.schema import load_study
 
@@ -31,7 +31,7 @@ def _plan(study_file):
     todo = [(s, p, v) for s in study.scenes for p in study.paths for v in study.variants]
     scenes = {s.label: backend.load_scene(s.source, dict(s.params)) for s in study.scenes}
     cams = {(s.label, p.name): backend.make_cameras(scenes[s.label],
-                                                   runner.rendered_path(study, p),
+                                                   programs.rendered_path(study, p),
                                                    *study.resolution)
             for s in study.scenes for p in study.paths}
     return study, todo, scenes, cams
@@ -42,12 +42,12 @@ def _frames(study, todo, scenes, cams, compiled):
     out = {}
     for s, p, v in todo:
         seq_cams = cams[s.label, p.name]
-        prog = compiled[runner.program_key(s, v)]
+        prog = compiled[programs.program_key(s, v)]
         for t, cam in enumerate(seq_cams):
             f = prog.call(scenes[s.label], cam)
             out[s.label, p.name, v.label, v.params_json, t] = jax.tree.map(
                 np.asarray, (f.image, f.counts, f.aux))
-        f = compiled[runner.program_key(s, v, len(seq_cams))].call(scenes[s.label], seq_cams)
+        f = compiled[programs.program_key(s, v, len(seq_cams))].call(scenes[s.label], seq_cams)
         out[s.label, p.name, v.label, v.params_json, "sequence"] = jax.tree.map(
             np.asarray, (f.image, f.counts, f.aux))
     return out
@@ -70,7 +70,7 @@ def _compile(monkeypatch, mode, plan, tmp_path):
 
     monkeypatch.setenv(compile_pool.ENV, mode)
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / f"cache{mode}"))
-    out = runner.compile_all(*plan)
+    out = programs.compile_all(*plan)
     study, todo, scenes, cams = plan
     refs = {}
     for s, p, _ in todo:
@@ -83,8 +83,8 @@ def _compile(monkeypatch, mode, plan, tmp_path):
 def _keys(plan):
     """Per scene and variant: the single-frame program and one sequence program per length."""
     study, todo, _, cams = plan
-    return ({runner.program_key(s, v) for s, _, v in todo}
-            | {runner.program_key(s, v, len(cams[s.label, p.name])) for s, p, v in todo})
+    return ({programs.program_key(s, v) for s, _, v in todo}
+            | {programs.program_key(s, v, len(cams[s.label, p.name])) for s, p, v in todo})
 
 
 def _notes(caplog):

@@ -6,6 +6,7 @@ import json
 import os
 
 
+from jaxrender.figures import draw_run_figures
 from jaxrender.study import store
 from jaxrender.study.runner import run_study
 from jaxrender.study.schema import load_study
@@ -15,10 +16,12 @@ REQUIRED = ("scene", "camera_path", "pipeline", "params", "frame", "rmse", "psnr
             "covered_pixels", "time_ms")
 
 
-def _run(study_file, out, **kw):
+def _run(study_file, out, figures=True, **kw):
     study = load_study(study_file)
     logs = []
     res = run_study(study, out, progress=False, log=logs.append, **kw)
+    if figures:
+        draw_run_figures(res, log=logs.append)
     return res, logs
 
 
@@ -156,7 +159,7 @@ def slow(self, rows):
     print("appended", flush=True)
     time.sleep(0.5)
 mp.setattr(store.ResultStore, "append", slow)
-runner.run_study(load_study(sys.argv[1]), sys.argv[2], progress=False, figures=False,
+runner.run_study(load_study(sys.argv[1]), sys.argv[2], progress=False,
                  log=lambda *a: None)  # stdout carries only the "appended" markers
 """
 
@@ -202,7 +205,7 @@ def test_real_metrics(fake, tiny_study, tmp_path, monkeypatch):
     for name, metric in doubles.REAL_METRICS.items():  # undo the fakes the fixture installed
         monkeypatch.setitem(m.METRICS, name, metric)
     study = load_study(tiny_study).with_overrides(frames=2)
-    res = run_study(study, tmp_path / "real", progress=False, figures=False, log=lambda s: None)
+    res = run_study(study, tmp_path / "real", progress=False, log=lambda s: None)
     for r in res.rows:
         assert 0 < r["psnr"] < 80 and 0 < r["mssim"] <= 1 and 0 <= r["flip"] <= 1
         assert r["delta_e"] >= 0 and r["temporal_error"] >= 0

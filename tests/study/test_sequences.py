@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import get_pipeline, make_config
-from jaxrender.study import backend, runner
+from jaxrender.study import backend, programs, runner
 from jaxrender.study.schema import load_study
 
 W, H = 32, 18
@@ -80,8 +80,7 @@ def _run(tmp_path_factory, text: str):
     mp.setattr(backend, "frame_metrics", keep)
     try:
         study = load_study(f)
-        res = runner.run_study(study, root / "run", progress=False, figures=False,
-                               log=lambda *a: None)
+        res = runner.run_study(study, root / "run", progress=False, log=lambda *a: None)
     finally:
         mp.undo()
     # run_study scores sequences in plan order: scene, path, variant, frame
@@ -108,7 +107,7 @@ def _direct(study, label, path_name, warmup=0):
     path = next(p for p in study.paths if p.name == path_name)
     v = next(v for v in study.variants if v.label == label)
     scene = backend.load_scene(spec.source, dict(spec.params))
-    cams = backend.make_cameras(scene, runner.rendered_path(study, path), W, H)
+    cams = backend.make_cameras(scene, programs.rendered_path(study, path), W, H)
     cfg = make_config(v.type, width=W, height=H, **dict(v.params))
     pipe = get_pipeline(v.type)
     return pipe, scene, cams, cfg, pipe.render_sequence(scene, cams, cfg, warmup_frames=warmup)

@@ -1,0 +1,126 @@
+"""Every program a study times, compiled side by side before anything is timed (never during
+timing), while the references render into the cache.
+
+With more than two workers (or ``JAXRENDER_COMPILE_PROCESSES=1``) the programs compile in
+spawned worker processes (``compile_pool``): tracing and lowering hold the GIL, so threads
+would take turns on it. Otherwise (and for any program a worker cannot take) in a thread
+pool: XLA compiles outside the GIL, so N cores still compile N programs at once.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
+
+from jaxrender import timing
+from jaxrender.study import backend, compile_pool, references
+from jaxrender.study.schema import Study
+
+# Programs compiled side by side. compile_ms is the wall time of a compile that shared the
+# machine with this many others; the rows carry the number as compile_workers.
+COMPILE_WORKERS = max(1, min(8, os.cpu_count() or 1))
+
+
+def rendered_path(study: Study, path):
+    """The path as rendered: its frames plus the study's warm-up frames before them."""
+    return dataclasses.replace(path, frames=path.frames + study.warmup_frames)
+
+
+def compile_variant(study: Study, scene, cameras, variant, *, sequence: bool) -> timing.Compiled:
+    """The variant's sequence program over ``cameras`` (the rendered path, warm-up included)
+    or, with ``sequence=False``, its single-frame program (``cameras`` one camera)."""
+    w, h = study.resolution
+    pipe = backend.pipeline(variant.type)
+    cfg = backend.make_config(variant.type, w, h, dict(variant.params))
+    return timing.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
+                                  warmup_frames=study.warmup_frames if sequence else 0)
+
+
+def program_key(spec, variant, frames: int = 0) -> tuple:
+    """One compiled program per scene, variant and sequence length (0: the single-frame
+    program): the points of a sweep share a label, so the key holds their parameters too."""
+    return spec.label, variant.label, variant.params_json, frames
+
+
+class _Compiler:
+    """Submits compiles to worker processes (falling back to threads) or to threads."""
+
+    def __init__(self, study: Study, scenes: dict):
+        self.study, self.scenes = study, scenes
+        self.threads = ThreadPoolExecutor(max_workers=COMPILE_WORKERS)
+        self.procs = (compile_pool.ProcessCompiler(COMPILE_WORKERS, self.threads)
+                      if compile_pool.use_processes(COMPILE_WORKERS) else None)
+
+    def submit(self, label, spec, path, pipe, params, sequence, fn, *args):
+        """fn(*args) in a thread, or the program of pipeline ``pipe`` with ``params`` in a
+        worker process with fn(*args) as the fallback."""
+        if self.procs is None:
+            return self.threads.submit(fn, *args)
+        study = self.study
+        try:
+            job = compile_pool.Job(
+                backend.load_scene, backend.make_cameras, spec.source,
+                tuple(dict(spec.params).items()), rendered_path(study, path),
+                tuple(study.resolution), backend.pipeline(pipe),
+                backend.make_config(pipe, *study.resolution, dict(params)),
+                sequence=sequence, warmup_frames=study.warmup_frames if sequence else 0,
+                scene=self.scenes[spec.label])
+        except Exception:  # fn raises it again, where the thread path would
+            return self.threads.submit(fn, *args)
+        return self.procs.submit(label, job, lambda: fn(*args))
+
+    def close(self):
+        if self.procs is not None:
+            self.procs.shutdown()
+        self.threads.shutdown(wait=True, cancel_futures=True)
+
+
+def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
+    """Compile every program of ``todo`` (per scene and variant the sequence program of each
+    path length and the single-frame program), and the reference program of each scene whose
+    references are not all cached, while this thread renders the references into the cache.
+    ``cams[scene label, path name]`` are the rendered path's cameras (warm-up included).
+    Returns {program_key: Compiled}."""
+    comp = _Compiler(study, scenes)
+    pairs = {(s.label, p.name): (s, p) for s, p, _ in todo}
+    warm, ref = study.warmup_frames, study.reference
+    try:
+        # Tracing holds the GIL, so the longest chains start first: references (this thread
+        # renders them while the rest compiles), then programs with host-side preparation
+        # (object-space charts), then the others.
+        ref_programs: dict = {}
+        for spec, path in pairs.values():
+            ref_cams = cams[spec.label, path.name][warm:]
+            if spec.label not in ref_programs and not references.all_cached(
+                    spec, ref_cams, ref, study.resolution):
+                ref_programs[spec.label] = comp.submit(
+                    f"the reference of {spec.label}", spec, path, ref.pipeline, ref.params,
+                    False, references.compile_reference, scenes[spec.label], ref_cams[0], ref,
+                    study.resolution)
+        futures = _submit_variants(comp, study, todo, scenes, cams)
+        for spec, path in pairs.values():
+            references.reference_frames(scenes[spec.label], spec,
+                                        cams[spec.label, path.name][warm:], ref,
+                                        study.resolution, programs=ref_programs)
+        return {key: f.result() for key, f in futures.items()}
+    finally:
+        comp.close()
+
+
+def _submit_variants(comp: _Compiler, study: Study, todo, scenes: dict, cams: dict) -> dict:
+    futures: dict = {}
+    warm = study.warmup_frames
+    prepares = lambda t: backend.pipeline(t[2].type).prepares  # noqa: E731
+    for spec, path, v in sorted(todo, key=lambda t: not prepares(t)):
+        seq_cams = cams[spec.label, path.name]
+        for frames in (len(seq_cams), 0) if study.timing.single_frame else (len(seq_cams),):
+            key = program_key(spec, v, frames)
+            if key not in futures:
+                what = f"{spec.label}/{v.label}" + (f" ({frames} frames)" if frames else "")
+                args = (seq_cams, v) if frames else (seq_cams[warm], v)
+                futures[key] = comp.submit(what, spec, path, v.type, v.params, bool(frames),
+                                           partial(compile_variant, sequence=bool(frames)),
+                                           study, scenes[spec.label], *args)
+    return futures
