@@ -1,8 +1,8 @@
 """jaxrender's rasterizer beside its peers, on the same scene, resolution and device:
 
 * jaxrenderer 0.4.0 (PyPI, ``import renderer``), depth only: its README's size (1920x1080,
-  about 2.5k triangles) and 640x360 with 10k triangles (issue 11: about 120 ms and 37 ms on the
-  H100; goal: jaxrender at least 150x faster). The goal's ratio (``speedup_vs_jaxrenderer``)
+  about 2.5k triangles) and 640x360 with 10k triangles (the goal: jaxrender at least 150x
+  faster; benchmarks/RESULTS.md has the numbers). The goal's ratio (``speedup_vs_jaxrenderer``)
   is taken against jaxrender's ids-and-depth output (``rasterize_depth_clip``), the nearest to
   a depth render, in a frame loop of the compiled program that donates each frame's buffers
   to the next (what ``donate=`` runs); the single call's ratio (previous result kept alive,
@@ -82,8 +82,8 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
     * ``jaxrender[_depth]_loop_ms``: a frame loop of the same program, each frame donating
       the previous one's buffers (what ``donate=`` runs), as a renderer's loop would;
     * ``jaxrender[_depth]_public_loop_ms``: that loop through the public entry point, whose
-      Python checks cost a frame this small about twice their own time (measured 2026-11-23:
-      20 us of Python before each call added 40 us);
+      Python checks cost a frame this small about twice their own time (they also delay
+      the next dispatch; benchmarks/RESULTS.md);
     * ``jaxrender[_depth]_batched_ms``: ``draws`` calls dispatched back to back with one wait
       (the throughput GL's loop measures).
 

@@ -1,3 +1,3 @@
 """jaxrender: study real-time shading architectures on identical scenes, measured in JAX."""
 
-__version__ = "0.1.0"
+from jaxrender.version import VERSION as __version__  # noqa: F401

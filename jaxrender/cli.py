@@ -12,7 +12,8 @@ import sys
 import tomllib
 from pathlib import Path
 
-from jaxrender.study.errors import StudyError, UserError
+from jaxrender.bench import add_arguments as bench_arguments  # argparse only: no jax yet
+from jaxrender.errors import StudyError, UserError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -189,7 +190,12 @@ def cmd_bench(a) -> int:
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="jaxrender", description="Study real-time shading architectures in JAX.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in (_add_study, _add_inspection, _add_render, _add_bench, _add_reference):
+        add(sub)
+    return p
 
+
+def _add_study(sub) -> None:
     s = sub.add_parser("study", help="run a study file", description=(
         "Render every (scene, camera path, pipeline variant, frame) of a study, score it "
         "against the cached reference, time it, and write results.jsonl, results.csv, the "
@@ -203,6 +209,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
     s.set_defaults(fn=cmd_study)
 
+
+def _add_inspection(sub) -> None:
+    """validate, figures, scenes, pipelines: commands that render nothing."""
     s = sub.add_parser("validate", help="check a study file without running it",
                        description="Validate a study file and print what it would render.")
     s.add_argument("file")
@@ -223,6 +232,8 @@ def build_parser() -> argparse.ArgumentParser:
                        description="List the registered pipelines, one line each.")
     s.set_defaults(fn=cmd_pipelines)
 
+
+def _add_render(sub) -> None:
     s = sub.add_parser("render", help="render one frame to a PNG", description=(
         "Render one frame of SCENE from its default camera with one pipeline, write the image "
         "and print the counts."))
@@ -236,8 +247,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print the counts as JSON")
     s.set_defaults(fn=cmd_render)
 
-    from jaxrender.bench import add_arguments as bench_arguments  # argparse only, no jax
 
+def _add_bench(sub) -> None:
     s = sub.add_parser("bench", help="time the rasterizer, pipelines and metrics", description=(
         "Rasterizer throughput against triangle count and resolution, each pipeline's frame "
         "time on each built-in scene, metric times, compile times apart and peak device "
@@ -245,6 +256,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench_arguments(s)
     s.set_defaults(fn=cmd_bench)
 
+
+def _add_reference(sub) -> None:
     s = sub.add_parser("reference", help="manage the reference cache", description=(
         "The reference cache ($JAXRENDER_CACHE or ~/.cache/jaxrender/reference)."))
     rsub = s.add_subparsers(dest="action", required=True, parser_class=_Parser)
@@ -260,7 +273,6 @@ def build_parser() -> argparse.ArgumentParser:
     r = rsub.add_parser("info", help="where the cache is and how big",
                         description="Print the cache location, entry count and code version.")
     r.set_defaults(fn=cmd_reference)
-    return p
 
 
 def main(argv=None) -> int:

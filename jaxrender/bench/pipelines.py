@@ -8,8 +8,8 @@ import tomllib
 
 from jaxrender.timing import time_first_call
 
-# Scenes as "name" or "name:key=value,key=value" (TOML values); the 100k-triangle scene of the
-# issue-11 targets comes second, so that a time budget reaches it.
+# Scenes as "name" or "name:key=value,key=value" (TOML values); the 100k-triangle target scene
+# comes second, so that a time budget reaches it.
 TARGET_SCENE = "many_small:n_triangles=100000,point_lights=4"
 COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "overflow")
 

@@ -14,7 +14,8 @@ from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.raster.test_meshes import terrain
 from jaxrender.scene.camera import look_at, world_to_clip
 
-# (triangles, width, height); the full sweeps follow issue 11, --quick is for a CPU.
+# (triangles, width, height); the full sweeps are the GPU targets of benchmarks/RESULTS.md,
+# --quick is for a CPU.
 TRIANGLE_SWEEP = [(10_000, 1920, 1080), (40_000, 1920, 1080), (164_000, 1920, 1080),
                   (655_000, 1920, 1080), (2_600_000, 1920, 1080)]
 RESOLUTION_SWEEP = [(164_000, 640, 360), (164_000, 1280, 720), (164_000, 2560, 1440),

@@ -1,5 +1,5 @@
 """Config-driven studies: TOML schema, runner, result store, reference cache, summary."""
 
-from jaxrender.study.errors import StudyError, Unavailable, UserError  # noqa: F401
+from jaxrender.errors import StudyError, Unavailable, UserError  # noqa: F401
 from jaxrender.study.runner import RunResult, run_study  # noqa: F401
 from jaxrender.study.schema import FIGURES, Study, load_study, parse_resolution  # noqa: F401

@@ -18,7 +18,7 @@ from jaxrender.pipelines import registry
 from jaxrender.scene.builtin import BUILTINS
 from jaxrender.scene.camera_path import PATH_TYPES
 from jaxrender.scene.hard_cases import HARD_SCENES
-from jaxrender.study.errors import Unavailable, UserError
+from jaxrender.errors import Unavailable, UserError
 
 # ---------------------------------------------------------------- pipelines
 

@@ -21,6 +21,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from jaxrender.version import VERSION
+
 _CODE_DIRS = ("raster", "shading", "scene", "pipelines")
 
 
@@ -37,14 +39,12 @@ def cache_dir() -> Path:
 @functools.lru_cache(maxsize=1)
 def code_version() -> str:
     """jaxrender's version and a hash of the sources a reference image depends on."""
-    import jaxrender
-
-    root = Path(jaxrender.__file__).parent
+    root = Path(__file__).resolve().parents[1]  # the jaxrender package
     h = hashlib.sha256()
     for d in _CODE_DIRS:
         for f in sorted((root / d).rglob("*.py")):
             h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
-    return f"{jaxrender.__version__}+{h.hexdigest()[:12]}"
+    return f"{VERSION}+{h.hexdigest()[:12]}"
 
 
 def camera_digest(camera) -> str:

@@ -18,7 +18,7 @@ instead, with a logged note: a program is never dropped.
 
 ``JAXRENDER_COMPILE_TIMELINE=1`` makes each worker print one line per program to stderr: wall
 clock start and end, and the seconds spent getting the scene, lowering (with any host-side
-preparation) and compiling; what found the overview study's critical path (2026-11-23).
+preparation) and compiling, to find which programs make a study's critical path.
 
 Workers are started with "spawn" (never "fork": the parent has JAX/CUDA threads), without the
 parent's ``__main__`` (as ``jaxrender.figures.parallel`` does), with
@@ -72,8 +72,9 @@ class Job:
     cfg: Any  # its config
     sequence: bool = False  # the sequence program over the path, else the single frame
     warmup_frames: int = 0
-    scene: Any = None  # the loaded scene, when the parent has it: a worker then loads nothing
-    # (the room's shadow map alone was a rasterizer compile per worker, 2026-11-23)
+    # The loaded scene, when the parent has it: a worker then loads nothing (loading can
+    # compile programs of its own, a shadow map's rasterizer, in every worker again).
+    scene: Any = None
 
 
 # ------------------------------------------------------------------ worker side

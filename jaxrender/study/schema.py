@@ -22,7 +22,7 @@ from typing import Any
 from jaxrender.metrics import METRICS
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
 from jaxrender.study import backend
-from jaxrender.study.errors import StudyError, UserError
+from jaxrender.errors import StudyError, UserError
 
 FIGURES = (
     "image_grid",
@@ -609,40 +609,25 @@ def _toml_value(v) -> str:
     raise TypeError(f"cannot write {v!r} as TOML")
 
 
+def _fields_toml(spec, **extra) -> list[str]:
+    """``key = value`` lines of a spec's TOML fields (tables of pairs written as tables)."""
+    out = [f"{k} = {_toml_value(v)}" for k, v in extra.items()]
+    for f in dataclasses.fields(spec):
+        v = getattr(spec, f.name)
+        if f.metadata.get("toml", True) and not dataclasses.is_dataclass(v) and not (
+                v and isinstance(v, tuple) and dataclasses.is_dataclass(v[0])):
+            out.append(f"{f.name} = {_toml_value(dict(v) if f.metadata.get('table') else v)}")
+    return out
+
+
 def to_toml(study: Study) -> str:
     """The study fully resolved (presets expanded, CLI overrides applied) as a study file that
     ``load_study`` reads back to an equal Study."""
-    w, h = study.resolution
-    lines = [
-        f"# resolved from {study.file}",
-        f"name = {_toml_value(study.name)}",
-        f"description = {_toml_value(study.description)}",
-        f"resolution = [{w}, {h}]",
-        f"metrics = {_toml_value(study.metrics)}",
-        f"figures = {_toml_value(study.figures)}",
-        f"save_frames = {_toml_value(study.save_frames)}",
-        f"warmup_frames = {study.warmup_frames}",
-        "",
-        "[reference]",
-        f"pipeline = {_toml_value(study.reference.pipeline)}",
-        f"params = {_toml_value(dict(study.reference.params))}",
-        f"check_convergence = {_toml_value(study.reference.check_convergence)}",
-        f"min_margin_db = {_toml_value(study.reference.min_margin_db)}",
-        "",
-        "[timing]",
-        f"warmup = {study.timing.warmup}",
-        f"repeats = {study.timing.repeats}",
-        f"single_frame = {_toml_value(study.timing.single_frame)}",
-    ]
-    for s in study.scenes:
-        lines += ["", "[[scenes]]", f"name = {_toml_value(s.source)}",
-                  f"label = {_toml_value(s.label)}", f"params = {_toml_value(dict(s.params))}"]
-    for p in study.paths:
-        lines += ["", "[[paths]]", f"name = {_toml_value(p.name)}", f"type = {_toml_value(p.type)}",
-                  f"frames = {p.frames}", f"params = {_toml_value(dict(p.params))}"]
-    for p in study.pipelines:
-        lines += ["", "[[pipelines]]", f"type = {_toml_value(p.type)}",
-                  f"label = {_toml_value(p.label)}", f"params = {_toml_value(dict(p.params))}",
-                  f"sweep = {_toml_value(dict(p.sweep))}",
-                  f"sweep_mode = {_toml_value(p.sweep_mode)}"]
+    lines = [f"# resolved from {study.file}", *_fields_toml(study)]
+    for section in ("reference", "timing"):
+        lines += ["", f"[{section}]", *_fields_toml(getattr(study, section))]
+    for section in ("scenes", "paths", "pipelines"):
+        for spec in getattr(study, section):
+            extra = {"name": spec.source} if section == "scenes" else {}
+            lines += ["", f"[[{section}]]", *_fields_toml(spec, **extra)]
     return "\n".join(lines) + "\n"

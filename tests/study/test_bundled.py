@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from jaxrender.study.errors import StudyError
+from jaxrender.errors import StudyError
 from jaxrender.study.schema import load_study
 
 ROOT = Path(__file__).resolve().parents[2]

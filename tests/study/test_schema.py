@@ -5,7 +5,7 @@ import textwrap
 
 import pytest
 
-from jaxrender.study.errors import StudyError, UserError
+from jaxrender.errors import StudyError, UserError
 from jaxrender.study.schema import load_study, parse_resolution, to_toml
 
 BASE = """

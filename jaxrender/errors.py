@@ -17,4 +17,5 @@ class StudyError(UserError, ValueError):
 
 
 class Unavailable(UserError, RuntimeError):
-    """A part of jaxrender the study needs has not landed yet (scenes, metrics, a pipeline)."""
+    """A part of jaxrender the study needs is missing: a pipeline that is not registered, a
+    camera path that gives the wrong number of cameras."""
