@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import platform
-import time
 
 import jax
 import jax.numpy as jnp

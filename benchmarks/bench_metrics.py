@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import platform
 import statistics
-import time
 
 import jax
 import jax.numpy as jnp

@@ -18,7 +18,6 @@ import argparse
 import json
 import statistics
 import sys
-import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -31,7 +30,7 @@ from jaxrender.timing import environment, time_call  # noqa: E402
 from jaxrender.pipelines import list_pipelines, make_config, program  # noqa: E402
 from jaxrender.scene import load_scene  # noqa: E402
 from jaxrender.scene.camera_path import pan  # noqa: E402
-from jaxrender.study.schema import parse_resolution  # noqa: E402
+from jaxrender.study.specs import parse_resolution  # noqa: E402
 
 
 def _compile_both(pipe, scene, path, cfg):

@@ -22,7 +22,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _resolution(text: str):
-    from jaxrender.study.schema import parse_resolution
+    from jaxrender.study.specs import parse_resolution
 
     try:
         return parse_resolution(text, "--resolution")
@@ -74,7 +74,7 @@ def cmd_validate(a) -> int:
 
 def cmd_figures(a) -> int:
     from jaxrender.figures.make import render_figures
-    from jaxrender.study.schema import FIGURES
+    from jaxrender.study.specs import FIGURES
 
     run = Path(a.run_dir)
     if not (run / "results.csv").exists():
@@ -132,7 +132,8 @@ def cmd_render(a) -> int:
     from jaxrender import timing
     from jaxrender.study import backend
     from jaxrender.study.store import json_number
-    from jaxrender.study.schema import Checker, check_params
+    from jaxrender.study.schema import check_params
+    from jaxrender.study.tables import Checker
 
     w, h = a.resolution or (320, 180)
     params = check_params(Checker("--set"), "", a.pipeline, _parse_sets(a.set), (w, h))

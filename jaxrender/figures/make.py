@@ -10,7 +10,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from jaxrender.figures import data, parallel, plots
-from jaxrender.study.schema import FIGURES
+from jaxrender.study.specs import FIGURES
 
 
 def _figure_jobs(run: data.Run, name: str) -> list[tuple[str, Callable[[], Figure]]]:

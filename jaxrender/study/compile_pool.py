@@ -66,7 +66,7 @@ class Job:
     make_cameras: Callable  # backend.make_cameras
     source: str
     scene_params: tuple  # items of the scene's parameters
-    path: Any  # schema.PathSpec (its frames include the warm-up frames)
+    path: Any  # specs.PathSpec (its frames include the warm-up frames)
     resolution: tuple  # (width, height)
     pipeline: Any  # the registered Pipeline
     cfg: Any  # its config

@@ -16,7 +16,7 @@ from functools import partial
 
 from jaxrender import timing
 from jaxrender.study import backend, compile_pool, references
-from jaxrender.study.schema import Study
+from jaxrender.study.specs import Study
 
 # Programs compiled side by side. compile_ms is the wall time of a compile that shared the
 # machine with this many others; the rows carry the number as compile_workers.

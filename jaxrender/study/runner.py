@@ -22,11 +22,11 @@ from tqdm import tqdm
 
 from jaxrender import timing
 from jaxrender.pipelines.program import PipelineOverflow, stack_cameras
-from jaxrender.study import backend, cache, schema, store, summary
+from jaxrender.study import backend, cache, store, summary
 from jaxrender.study.programs import (COMPILE_WORKERS, compile_all, compile_variant,
                                       program_key, rendered_path)
 from jaxrender.study.references import reference_frames
-from jaxrender.study.schema import Study
+from jaxrender.study.specs import Study, to_toml
 
 
 @dataclass
@@ -200,7 +200,7 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
 
 
 def _write_run_files(study: Study, out_dir: Path, env: dict) -> None:
-    store.atomic_write_text(out_dir / "study.toml", schema.to_toml(study))
+    store.atomic_write_text(out_dir / "study.toml", to_toml(study))
     store.atomic_write_text(out_dir / "environment.json", json.dumps(
         {**env, "code_version": cache.code_version(), "study_file": study.file,
          "date": time.strftime("%Y-%m-%d %H:%M:%S")}, indent=2) + "\n")

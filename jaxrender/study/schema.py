@@ -12,158 +12,17 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import itertools
-import json
-import math
-import tomllib
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
+from jaxrender.errors import StudyError, UserError
 from jaxrender.metrics import METRICS
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
 from jaxrender.study import backend
-from jaxrender.errors import StudyError, UserError
-
-FIGURES = (
-    "image_grid",
-    "pareto_time",
-    "pareto_count",
-    "temporal",
-    "dacs_decisions",
-    "object_space_marking",
-    "visbuffer_waves",
-    "summary_table",
-)
-MAX_SIDE = 8192
-SSIM_MIN_SIDE = 11  # the 11-tap Gaussian window of Wang et al.
-
-
-
-def _toml(default=dataclasses.MISSING, **meta):
-    """A spec field: ``lo`` bounds an integer, ``toml=False`` keeps it out of the file,
-    ``empty=True`` lets a string be empty, ``table=True`` wants a table, ``required=True``
-    must be given although the dataclass has a default (for field order)."""
-    return field(default=default, metadata=meta)
-
-
-# ------------------------------------------------------------------ the validated objects
-
-
-@dataclass(frozen=True)
-class SceneSpec:
-    label: str  # the name rows use
-    source: str = _toml(toml=False)  # built-in name, or an absolute path to a scene TOML file
-    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
-    file_hash: str = _toml("", toml=False)  # sha256 of the scene file, for the cache key
-
-
-@dataclass(frozen=True)
-class PathSpec:
-    name: str
-    type: str
-    frames: int = _toml(lo=1)
-    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
-
-
-@dataclass(frozen=True)
-class Variant:
-    """One point of a pipeline entry's sweep: what a row's ``pipeline`` and ``params`` hold."""
-
-    label: str
-    type: str
-    params: tuple[tuple[str, Any], ...]
-
-    @property
-    def params_json(self) -> str:
-        return json.dumps(dict(self.params), sort_keys=True, separators=(",", ":"))
-
-
-@dataclass(frozen=True)
-class PipelineSpec:
-    label: str
-    type: str
-    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
-    sweep: tuple[tuple[str, tuple], ...] = _toml((), table=True)
-    sweep_mode: str = "cartesian"
-    variants: tuple[Variant, ...] = _toml((), toml=False)
-
-
-@dataclass(frozen=True)
-class ReferenceSpec:
-    pipeline: str = "reference"
-    params: tuple[tuple[str, Any], ...] = _toml((), table=True)
-    check_convergence: bool = True
-    min_margin_db: float = 10.0
-
-
-@dataclass(frozen=True)
-class TimingSpec:
-    warmup: int = _toml(1, lo=0)
-    repeats: int = _toml(3, lo=1)
-    # Also compile and time each variant's single-frame program (time_ms_single beside the
-    # per-frame time in the sequence); false compiles one program per variant, not two.
-    single_frame: bool = True
-
-
-@dataclass(frozen=True)
-class Study:
-    file: str = _toml(toml=False)
-    name: str = _toml("")
-    description: str = _toml("", empty=True)
-    resolution: tuple[int, int] = (320, 180)  # (width, height)
-    scenes: tuple[SceneSpec, ...] = _toml((), required=True)
-    paths: tuple[PathSpec, ...] = None
-    pipelines: tuple[PipelineSpec, ...] = _toml((), required=True)
-    reference: ReferenceSpec = _toml(None, table=True)
-    metrics: tuple[str, ...] = tuple(METRICS)
-    figures: tuple[str, ...] = FIGURES
-    save_frames: tuple[int, ...] = (0,)
-    timing: TimingSpec = _toml(None, table=True)
-    # Frames rendered before the scored ones of every path (the path runs that much longer
-    # and its first frames are dropped), so that temporal pipelines start with a warm history.
-    warmup_frames: int = _toml(0, lo=0)
-
-    @property
-    def variants(self) -> tuple[Variant, ...]:
-        return tuple(v for p in self.pipelines for v in p.variants)
-
-    def with_overrides(self, *, frames: int | None = None, resolution=None) -> Study:
-        """The study with every path's frame count and/or the resolution replaced (CLI)."""
-        s = self
-        if frames is not None:
-            if not isinstance(frames, int) or frames < 1:
-                raise UserError(f"--frames: expected a positive integer, got {frames!r}")
-            s = dataclasses.replace(
-                s, paths=tuple(dataclasses.replace(p, frames=frames) for p in s.paths)
-            )
-        if resolution is not None:
-            s = dataclasses.replace(s, resolution=parse_resolution(resolution, "--resolution"))
-            if "mssim" in s.metrics and min(s.resolution) < SSIM_MIN_SIDE:
-                raise UserError(f"--resolution: MSSIM needs at least {SSIM_MIN_SIDE}x"
-                                f"{SSIM_MIN_SIDE} pixels; the study asks for mssim")
-        return s
-
-
-# ------------------------------------------------------------------ helpers
-
-
-def parse_resolution(value, where: str = "resolution") -> tuple[int, int]:
-    """'WxH' or [W, H] -> (W, H); UserError naming ``where`` otherwise."""
-    msg = f"{where}: expected 'WxH' or [width, height] with integers in 1..{MAX_SIDE}"
-    if isinstance(value, str):
-        parts = value.lower().split("x")
-        if len(parts) != 2 or not all(p.strip().isdigit() for p in parts):
-            raise UserError(f"{msg}, got {value!r}")
-        w, h = (int(p) for p in parts)
-    elif isinstance(value, (list, tuple)) and len(value) == 2:
-        if not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-            raise UserError(f"{msg}, got {value!r}")
-        w, h = value
-    else:
-        raise UserError(f"{msg}, got {value!r}")
-    if not (1 <= w <= MAX_SIDE and 1 <= h <= MAX_SIDE):
-        raise UserError(f"{msg}, got {w}x{h}")
-    return int(w), int(h)
+from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
+                                   ReferenceSpec, SceneSpec, Study, TimingSpec, Variant,
+                                   parse_resolution)
+from jaxrender.study.tables import (Checker, type_name, key_path, read_table, read_toml,
+                                    shown_path)
 
 
 def find_config_root(start: Path) -> Path:
@@ -172,132 +31,6 @@ def find_config_root(start: Path) -> Path:
         if (d / "configs").is_dir():
             return d
     return Path.cwd()
-
-
-def _type_name(v) -> str:
-    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string",
-            list: "a list", dict: "a table"}.get(type(v), type(v).__name__)
-
-
-def _sub(path: str, key) -> str:
-    return f"{path}.{key}" if path else str(key)
-
-
-class Checker:
-    """Typed accessors that raise StudyError naming the file and the key path."""
-
-    def __init__(self, file: str):
-        self.file = file
-
-    def fail(self, path: str, msg: str):
-        raise StudyError(self.file, path, msg)
-
-    def table(self, v, path) -> dict:
-        if not isinstance(v, dict):
-            self.fail(path, f"expected a table, got {_type_name(v)}")
-        return v
-
-    def keys(self, d: dict, path: str, allowed, required=(), hint: str = ""):
-        for k in d:
-            if k not in allowed:
-                self.fail(_sub(path, k), f"unknown key; allowed keys: {', '.join(sorted(allowed))}")
-        for k in required:
-            if k not in d:
-                self.fail(path or "(top level)", f"missing required key {k!r}{hint}")
-
-    def str_(self, v, path, empty=False) -> str:
-        if not isinstance(v, str) or not (v or empty):
-            self.fail(path, f"expected a {'' if empty else 'non-empty '}string, "
-                      f"got {_type_name(v)}")
-        return v
-
-    def int_(self, v, path, lo=None) -> int:
-        if not isinstance(v, int) or isinstance(v, bool):
-            self.fail(path, f"expected an integer, got {_type_name(v)}")
-        if lo is not None and v < lo:
-            self.fail(path, f"expected an integer >= {lo}, got {v}")
-        return v
-
-    def num(self, v, path) -> float:
-        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
-            self.fail(path, f"expected a finite number, got {v!r}")
-        return float(v)
-
-    def bool_(self, v, path) -> bool:
-        if not isinstance(v, bool):
-            self.fail(path, f"expected true or false, got {_type_name(v)}")
-        return v
-
-    def list_(self, v, path, nonempty=True) -> list:
-        if not isinstance(v, list):
-            self.fail(path, f"expected a list, got {_type_name(v)}")
-        if nonempty and not v:
-            self.fail(path, "expected a non-empty list")
-        return v
-
-    def names(self, v, path, known) -> tuple[str, ...]:
-        out = []
-        for i, n in enumerate(self.list_(v, path)):
-            n = self.str_(n, f"{path}[{i}]")
-            if n not in known:
-                self.fail(f"{path}[{i}]", f"unknown name {n!r}; known: {', '.join(known)}")
-            if n in out:
-                self.fail(f"{path}[{i}]", f"{n!r} is listed twice")
-            out.append(n)
-        return tuple(out)
-
-    def value(self, v, path, kind, **meta):
-        """``v`` checked as a ``kind`` (a type or its name); tables and lists stay as read."""
-        kind = getattr(kind, "__name__", kind)
-        if kind == "bool":
-            return self.bool_(v, path)
-        if kind == "int":
-            return self.int_(v, path, meta.get("lo"))
-        if kind == "float":
-            return self.num(v, path)
-        if kind == "str":
-            return self.str_(v, path, meta.get("empty", False))
-        if meta.get("table"):
-            return dict(self.table(v, path))
-        return v
-
-
-def read_table(ck: Checker, raw, path: str, cls, *, extra=(), defaults=None, hint="") -> dict:
-    """The table ``raw`` read as the fields of spec dataclass ``cls`` (plus the TOML-only keys
-    ``extra``): unknown keys and missing required ones (no default here or in ``defaults``)
-    are errors; each value is checked against its field's type (integers with the field's
-    ``lo``, tables as tables); the rest stays as read, for the caller to resolve."""
-    fields = [f for f in dataclasses.fields(cls) if f.metadata.get("toml", True)]
-    raw = ck.table(raw if raw is not None else {}, path or "(top level)")
-    defaults = defaults or {}
-    missing = [f.name for f in fields if f.metadata.get("required") or (
-        f.name not in defaults and f.default is dataclasses.MISSING)]
-    ck.keys(raw, path, {f.name for f in fields} | set(extra), required=missing, hint=hint)
-    out = {}
-    for f in fields:
-        if f.name in raw:
-            out[f.name] = ck.value(raw[f.name], _sub(path, f.name), f.type, **f.metadata)
-        else:
-            empty = {} if f.metadata.get("table") and f.default == () else f.default
-            out[f.name] = defaults.get(f.name, empty)
-    return out | {k: raw[k] for k in extra if k in raw}
-
-
-def _read_toml(path: Path, shown: str) -> dict:
-    try:
-        with open(path, "rb") as f:
-            return tomllib.load(f)
-    except FileNotFoundError:
-        raise StudyError(shown, "", "no such file") from None
-    except tomllib.TOMLDecodeError as e:
-        raise StudyError(shown, "", f"invalid TOML: {e}") from None
-
-
-def _rel(path: Path) -> str:
-    try:
-        return str(path.resolve().relative_to(Path.cwd().resolve()))
-    except ValueError:
-        return str(path)
 
 
 def _frozen(params: dict) -> tuple:
@@ -319,8 +52,8 @@ def with_preset(ck: Checker, item: dict, path: str, root: Path, cls, kind: str,
         avail = sorted(p.stem for p in (root / "configs" / kind).glob("*.toml"))
         ck.fail(f"{path}.preset", f"no {what} preset {preset!r} in configs/{kind}; "
                 f"available: {', '.join(avail) or '(none)'}")
-    pck = Checker(_rel(pfile))
-    merged = _read_toml(pfile, pck.file)
+    pck = Checker(shown_path(pfile))
+    merged = read_toml(pfile, pck.file)
     pck.keys(merged, "", _keys(cls, kind) - {"preset", name_key}, required=fixed)
     for k in ("params", "sweep"):
         if k in merged:
@@ -348,7 +81,7 @@ def check_params(ck: Checker, path: str, ptype: str, params: dict, resolution) -
     fields = {f.name: f for f in dataclasses.fields(pipe.config_cls)}
     out = {}
     for k, v in params.items():
-        where = _sub(path, k)
+        where = key_path(path, k)
         if k in ("width", "height"):
             ck.fail(where, "the resolution is set for the whole study (`resolution`)")
         if k not in fields:
@@ -396,7 +129,7 @@ def _scene(ck: Checker, item, path: str, root: Path, study_dir: Path) -> SceneSp
     file = _scene_file(ck, name, path, root, study_dir)
     for k, v in params.items():
         if isinstance(v, (dict, list)) and not (isinstance(v, list) and v):
-            ck.fail(f"{path}.params.{k}", f"expected a value, got {_type_name(v)}")
+            ck.fail(f"{path}.params.{k}", f"expected a value, got {type_name(v)}")
     sizes = backend.scene_params(name) if file is None else None
     if sizes is not None:
         for k, v in params.items():
@@ -548,7 +281,7 @@ def _unique(ck: Checker, specs, attr: str, section: str, what: str, fix: str = "
 def load_study(file, *, config_root: Path | None = None) -> Study:
     """Read and validate a study file; StudyError names the file and key on any mistake."""
     p = Path(file)
-    data = _read_toml(p, str(file))
+    data = read_toml(p, str(file))
     return parse_study(data, str(file), study_dir=p.resolve().parent, config_root=config_root)
 
 
@@ -590,44 +323,3 @@ def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | N
     reference = _reference(ck, d["reference"], resolution)
     return Study(file, d["name"], d["description"], resolution, scenes, paths, pipelines,
                  reference, metrics, figures, save_frames, timing, d["warmup_frames"])
-
-
-# ------------------------------------------------------------------ the resolved config
-
-
-def _toml_value(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf")
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{" + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + "}"
-    raise TypeError(f"cannot write {v!r} as TOML")
-
-
-def _fields_toml(spec, **extra) -> list[str]:
-    """``key = value`` lines of a spec's TOML fields (tables of pairs written as tables)."""
-    out = [f"{k} = {_toml_value(v)}" for k, v in extra.items()]
-    for f in dataclasses.fields(spec):
-        v = getattr(spec, f.name)
-        if f.metadata.get("toml", True) and not dataclasses.is_dataclass(v) and not (
-                v and isinstance(v, tuple) and dataclasses.is_dataclass(v[0])):
-            out.append(f"{f.name} = {_toml_value(dict(v) if f.metadata.get('table') else v)}")
-    return out
-
-
-def to_toml(study: Study) -> str:
-    """The study fully resolved (presets expanded, CLI overrides applied) as a study file that
-    ``load_study`` reads back to an equal Study."""
-    lines = [f"# resolved from {study.file}", *_fields_toml(study)]
-    for section in ("reference", "timing"):
-        lines += ["", f"[{section}]", *_fields_toml(getattr(study, section))]
-    for section in ("scenes", "paths", "pipelines"):
-        for spec in getattr(study, section):
-            extra = {"name": spec.source} if section == "scenes" else {}
-            lines += ["", f"[[{section}]]", *_fields_toml(spec, **extra)]
-    return "\n".join(lines) + "\n"

@@ -4,7 +4,7 @@ import numpy as np
 
 from jaxrender.scene.camera import look_at
 from jaxrender.study import cache, references
-from jaxrender.study.schema import ReferenceSpec, SceneSpec
+from jaxrender.study.specs import ReferenceSpec, SceneSpec
 
 SCENE = SceneSpec("tiny", "tiny", (("n", 2),))
 REF = ReferenceSpec("reference", (("samples", 4),))

@@ -6,7 +6,8 @@ import textwrap
 import pytest
 
 from jaxrender.errors import StudyError, UserError
-from jaxrender.study.schema import load_study, parse_resolution, to_toml
+from jaxrender.study.schema import load_study
+from jaxrender.study.specs import parse_resolution, to_toml
 
 BASE = """
 name = "t"
