@@ -45,7 +45,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.bench.raster import static_args, terrain_camera, terrain_clip
-from jaxrender.bench.timing import dump, environment, print_table, time_compiled
+from jaxrender.bench.report import dump, print_table
+from jaxrender.timing import environment, time_compiled
 from jaxrender.raster import rasterize_clip, rasterize_depth_clip
 from jaxrender.raster.rasterize import _rasterize_donating, _rasterize_program
 from jaxrender.raster.setup import SUBPIXEL_BITS

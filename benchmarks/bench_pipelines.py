@@ -14,7 +14,7 @@ import argparse
 from jaxrender.bench.pipelines import parse_spec as parse_variant
 from jaxrender.pipelines import get_pipeline, make_config, program
 from jaxrender.scene import load_scene
-from jaxrender.study.timing import device_info, time_call
+from jaxrender.timing import environment, time_call
 
 DEFAULT_VARIANTS = ("forward", "forward:z_prepass=true", "deferred", "visbuffer",
                     "visbuffer:vrs=fixed")
@@ -28,7 +28,7 @@ def main(argv=None) -> None:
     ap.add_argument("--height", type=int, default=90)
     ap.add_argument("--repeats", type=int, default=5)
     a = ap.parse_args(argv)
-    info = device_info()
+    info = environment()
     print(f"device: {info['device']}, jax {info['jax_version']}, {a.width}x{a.height}, "
           f"median of {a.repeats} after 1 warm-up\n")
     print("| scene | pipeline | frame ms | compile ms | invocations | helper lanes | "

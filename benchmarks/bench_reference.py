@@ -19,11 +19,11 @@ import jax
 from jaxrender.pipelines import get_pipeline, program
 from jaxrender.pipelines.reference import ReferenceConfig, ldr_psnr
 from jaxrender.scene import default_camera, list_builtin_scenes, load_scene
-from jaxrender.study.timing import device_info, time_call
+from jaxrender.timing import environment, time_call
 
 
 def bench(scenes, width, height, ks, repeats) -> None:
-    print(f"device: {device_info()['device']}, jax {jax.__version__}\n")
+    print(f"device: {environment()['device']}, jax {jax.__version__}\n")
     print("| scene | resolution | k | samples/px | compile s | median ms | shaded samples "
           "| Msamples/s |")
     print("|---|---|---|---|---|---|---|---|")
@@ -45,7 +45,7 @@ def bench(scenes, width, height, ks, repeats) -> None:
 
 
 def convergence(scenes, width, height, ks) -> None:
-    print(f"device: {device_info()['device']}, jax {jax.__version__}\n")
+    print(f"device: {environment()['device']}, jax {jax.__version__}\n")
     print("| scene | resolution | k | 2k | PSNR(k, 2k) dB (LDR) |")
     print("|---|---|---|---|---|")
     pipe = get_pipeline("reference")
