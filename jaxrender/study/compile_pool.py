@@ -22,14 +22,15 @@ preparation) and compiling, to find which programs make a study's critical path.
 
 Workers are started with "spawn" (never "fork": the parent has JAX/CUDA threads), without the
 parent's ``__main__`` (as ``jaxrender.figures.parallel`` does), with
-``XLA_PYTHON_CLIENT_PREALLOCATE=false`` (a worker compiles, it must not hold GPU memory) and the
-parent's ``jax.config`` values; the rest of the environment (JAX_PLATFORMS, XLA_FLAGS, ...)
-is inherited. This module imports nothing heavy at the top, so a worker sets its environment
-before JAX starts.
+``XLA_PYTHON_CLIENT_PREALLOCATE=false`` in their environment from the start (a worker compiles,
+it must not hold GPU memory; set around the spawn, so it holds whatever a worker imports
+first) and the parent's ``jax.config`` values; the rest of the environment (JAX_PLATFORMS,
+XLA_FLAGS, ...) is inherited.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import pickle
@@ -84,7 +85,6 @@ _CAMERAS: dict = {}
 
 
 def _init_worker(config_values: dict) -> None:
-    os.environ["XLA_PYTHON_CLIENT_PREALLOCATE"] = "false"
     import jax
 
     current = jax.config.values
@@ -140,6 +140,20 @@ def compile_job(payload: bytes) -> bytes:
 
 
 # ------------------------------------------------------------------ parent side
+
+
+@contextlib.contextmanager
+def _worker_environment():
+    """The environment a worker is spawned with: the parent's, without GPU preallocation."""
+    old = os.environ.get("XLA_PYTHON_CLIENT_PREALLOCATE")
+    os.environ["XLA_PYTHON_CLIENT_PREALLOCATE"] = "false"
+    try:
+        yield
+    finally:
+        if old is None:
+            del os.environ["XLA_PYTHON_CLIENT_PREALLOCATE"]
+        else:
+            os.environ["XLA_PYTHON_CLIENT_PREALLOCATE"] = old
 
 
 def load(result: bytes, job: Job):
@@ -202,7 +216,7 @@ class ProcessCompiler:
     def submit(self, label: str, job: Job, fallback: Callable[[], Any]) -> Future:
         out: Future = Future()
         try:
-            with main_hidden():  # workers are spawned as jobs are submitted
+            with main_hidden(), _worker_environment():  # workers spawn as jobs arrive
                 payload = pickle.dumps(job)
                 pf = self._pool().submit(compile_job, payload)
         except Exception as e:
