@@ -25,7 +25,7 @@ import numpy as np
 
 REF_K = 4
 COUNT_COLUMNS = ("shade_invocations", "covered_pixels", "helper_lanes", "overshading")
-METRIC_NAMES = ("rmse", "psnr", "ssim", "flip", "delta_e2000")
+METRIC_NAMES = ("rmse", "psnr", "mssim", "flip", "delta_e")
 
 
 @functools.lru_cache(maxsize=None)
@@ -63,7 +63,7 @@ def reference_image(case_name: str, resolution) -> np.ndarray:
 def image_metrics(test: np.ndarray, ref: np.ndarray) -> dict:
     from jaxrender import metrics
 
-    names = [n for n in METRIC_NAMES if n != "ssim" or min(test.shape[:2]) >= 11]
+    names = [n for n in METRIC_NAMES if n != "mssim" or min(test.shape[:2]) >= 11]
     vals = metrics.image_metrics(test, ref, names=tuple(names))
     return {k: float(np.asarray(v)) for k, v in vals.items()}
 

@@ -5,13 +5,12 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from jaxrender.metrics._common import as_float, precision, resolve_dtype
-from jaxrender.metrics.color import delta_e2000
 from jaxrender.metrics.display import to_display
-from jaxrender.metrics.error import mse, psnr, rmse
-from jaxrender.metrics.flip import flip
-from jaxrender.metrics.ssim import ssim
+from jaxrender.metrics.error import mse
+from jaxrender.metrics.registry import METRICS
 
-IMAGE_METRICS = ("mse", "rmse", "psnr", "ssim", "flip", "delta_e2000")
+# The registry's per-image metrics, and the MSE beneath RMSE and PSNR.
+IMAGE_METRICS = ("mse", *(n for n, m in METRICS.items() if not m.sequence))
 
 
 def image_metrics(test, reference, *, names=IMAGE_METRICS, linear: bool = True,
@@ -29,12 +28,9 @@ def image_metrics(test, reference, *, names=IMAGE_METRICS, linear: bool = True,
             test = to_display(as_float(test, dt, "image_metrics", "test"), "ldr", exposure)
             reference = to_display(as_float(reference, dt, "image_metrics", "reference"),
                                    "ldr", exposure)
-    fns = {
-        "mse": lambda: mse(test, reference, dtype=dtype),
-        "rmse": lambda: rmse(test, reference, dtype=dtype),
-        "psnr": lambda: psnr(test, reference, dtype=dtype),
-        "ssim": lambda: ssim(test, reference, dtype=dtype),
-        "flip": lambda: flip(reference, test, dtype=dtype)[0],
-        "delta_e2000": lambda: delta_e2000(test, reference, dtype=dtype)[0],
-    }
-    return {name: fns[name]() for name in names}
+    out = {}
+    for name in names:
+        fn = mse if name == "mse" else METRICS[name].fn
+        value = fn(test, reference, dtype=dtype)
+        out[name] = value[0] if isinstance(value, tuple) else value
+    return out

@@ -40,8 +40,8 @@ def test_image_metrics_applies_display_once(seeded):
     disp_a, disp_b = metrics.to_display(lin_a), metrics.to_display(lin_b)
     np.testing.assert_allclose(float(got["rmse"]), float(metrics.rmse(disp_b, disp_a)),
                                err_msg=seeded.msg("rmse"))
-    np.testing.assert_allclose(float(got["ssim"]), float(metrics.ssim(disp_b, disp_a)),
-                               err_msg=seeded.msg("ssim"))
+    np.testing.assert_allclose(float(got["mssim"]), float(metrics.ssim(disp_b, disp_a)),
+                               err_msg=seeded.msg("mssim"))
     np.testing.assert_allclose(float(got["flip"]), float(metrics.flip(disp_a, disp_b)[0]),
                                err_msg=seeded.msg("flip: reference first"))
     assert set(got) == set(metrics.IMAGE_METRICS)
