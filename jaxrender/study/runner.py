@@ -56,6 +56,8 @@ def _save_npz(path: Path, meta: dict, **arrays) -> None:
 
 
 def _small(a) -> np.ndarray:
+    """Half floats and narrow integers: the figures need no more, and every saved frame of
+    every sequence is kept."""
     a = np.asarray(a)
     if a.dtype.kind == "f":
         return a.astype(np.float16)
