@@ -1,0 +1,62 @@
+"""JAX's persistent compilation cache, kept under jaxrender's cache directory, so a study rerun
+loads the executables it compiled before instead of compiling them again.
+
+Every program is cached, however quick its compile (JAX's default skips those under a second,
+which on a GPU is most of a study's programs). A ``JAX_COMPILATION_CACHE_DIR`` the user set
+wins; ``JAXRENDER_COMPILATION_CACHE=0`` turns the cache off. Compile workers inherit the
+setting with the rest of the parent's ``jax.config``.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from pathlib import Path
+
+import jax
+
+from jaxrender.study.cache import cache_root
+
+ENV_OFF = "JAXRENDER_COMPILATION_CACHE"
+_EVENTS = {"/jax/compilation_cache/cache_hits": "hits",
+           "/jax/compilation_cache/cache_misses": "misses"}
+_counts = {"hits": 0, "misses": 0}
+_lock = threading.Lock()
+_listening = False
+
+
+def default_dir() -> Path:
+    return cache_root() / "xla"
+
+
+def _count(event: str, **_) -> None:
+    key = _EVENTS.get(event)
+    if key:
+        with _lock:
+            _counts[key] += 1
+
+
+def enable(directory: Path | None = None) -> Path | None:
+    """Turn the persistent cache on (idempotent); the folder used, or None when it is off."""
+    global _listening
+    if os.environ.get(ENV_OFF, "").strip().lower() in ("0", "false", "no", "off"):
+        return None
+    current = jax.config.values.get("jax_compilation_cache_dir")
+    if current and directory is None:
+        folder = Path(current)
+    else:
+        folder = Path(directory) if directory is not None else default_dir()
+        folder.mkdir(parents=True, exist_ok=True)
+        jax.config.update("jax_compilation_cache_dir", str(folder))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    if not _listening:
+        jax.monitoring.register_event_listener(_count)
+        _listening = True
+    return folder
+
+
+def counts() -> dict:
+    """Programs found in (hits) and added to (misses) the cache by this process so far."""
+    with _lock:
+        return dict(_counts)

@@ -1,0 +1,135 @@
+"""The package as a user installs it: a wheel (not editable) in a fresh virtual environment,
+used from a folder outside the repository. Built-in presets, scene files and studies must be
+found from there, and a local ``configs/`` must override them."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import sysconfig
+import zipfile
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGE = REPO / "jaxrender"
+
+STUDY = """
+name = "outside"
+resolution = "16x16"
+metrics = ["psnr"]
+figures = []
+[[scenes]]
+name = "courtyard"
+[[paths]]
+preset = "pan_slow"
+frames = 1
+[reference]
+pipeline = "reference"
+params = { k = 1 }
+[timing]
+warmup = 0
+repeats = 1
+single_frame = false
+[[pipelines]]
+preset = "dacs_threshold_sweep"
+"""
+
+LOCAL_PAN = """
+description = "a local pan that overrides the built-in"
+type = "pan"
+frames = 3
+[params]
+pixels_per_frame = 2.0
+"""
+
+
+def run(args, cwd, env, timeout=900):
+    done = subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True,
+                          timeout=timeout)
+    assert done.returncode == 0, (f"{' '.join(map(str, args))} failed ({done.returncode}):\n"
+                                  f"{done.stdout[-3000:]}\n{done.stderr[-3000:]}")
+    return done.stdout
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("wheel")
+    run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", "-w", str(out),
+         str(REPO)], cwd=out, env=os.environ.copy())
+    (built,) = out.glob("jaxrender-*.whl")
+    return built
+
+
+@pytest.fixture(scope="module")
+def installed(wheel, tmp_path_factory):
+    """A fresh venv holding the wheel; its dependencies come from this interpreter's
+    site-packages, appended to its path (a .pth line adds the folder without running the
+    editable install's hooks in it, so the checkout itself is not importable there)."""
+    venv = tmp_path_factory.mktemp("venv")
+    run([sys.executable, "-m", "venv", str(venv)], cwd=venv, env=os.environ.copy())
+    bin_dir = venv / "bin"
+    site = Path(subprocess.check_output(
+        [bin_dir / "python", "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+        text=True).strip())
+    (site / "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    run([bin_dir / "python", "-m", "pip", "install", "--no-deps", "--no-index", "--quiet",
+         str(wheel)], cwd=venv, env=os.environ.copy())
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env["PATH"] = f"{bin_dir}{os.pathsep}{env.get('PATH', '')}"
+    env["JAXRENDER_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    return bin_dir, env
+
+
+def test_wheel_holds_the_presets_scenes_and_studies(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    shipped = sorted(str(p.relative_to(REPO)) for folder in ("configs", "studies")
+                     for p in (PACKAGE / folder).rglob("*.toml"))
+    assert len(shipped) >= 10, f"too few built-in files found in the checkout: {shipped}"
+    missing = [p for p in shipped if p not in names]
+    assert not missing, f"the wheel {wheel.name} lacks {missing}"
+
+
+def test_installed_package_imports_from_its_venv(installed, tmp_path):
+    bin_dir, env = installed
+    where = run([bin_dir / "python", "-c", "import jaxrender; print(jaxrender.__file__)"],
+                cwd=tmp_path, env=env).strip()
+    assert Path(where).is_relative_to(bin_dir.parent), (
+        f"jaxrender imported from {where}, not from the fresh venv {bin_dir.parent}")
+
+
+def test_builtin_presets_from_outside_the_repository(installed, tmp_path):
+    bin_dir, env = installed
+    (tmp_path / "outside.toml").write_text(STUDY)
+    run([bin_dir / "jaxrender", "validate", "outside.toml"], cwd=tmp_path, env=env)
+    run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/outside"],
+        cwd=tmp_path, env=env)
+    resolved = (tmp_path / "runs/outside/study.toml").read_text()
+    assert "built-in" in resolved and "pan_slow" in resolved, resolved
+
+
+def test_bundled_study_by_name_writes_under_the_working_directory(installed, tmp_path):
+    bin_dir, env = installed
+    listing = run([bin_dir / "jaxrender", "studies"], cwd=tmp_path, env=env)
+    assert "quickstart" in listing, listing
+    run([bin_dir / "jaxrender", "study", "quickstart", "--resolution", "32x18", "--frames",
+         "1"], cwd=tmp_path, env=env)
+    rows = (tmp_path / "runs/quickstart/results.csv").read_text().splitlines()
+    assert len(rows) > 1, f"no result rows in runs/quickstart/results.csv: {rows}"
+
+
+def test_local_configs_override_a_builtin_preset(installed, tmp_path):
+    bin_dir, env = installed
+    (tmp_path / "configs/paths").mkdir(parents=True)
+    (tmp_path / "configs/paths/pan_slow.toml").write_text(LOCAL_PAN)
+    (tmp_path / "outside.toml").write_text(STUDY)
+    listing = run([bin_dir / "jaxrender", "presets"], cwd=tmp_path, env=env)
+    line = next(ln for ln in listing.splitlines() if "pan_slow" in ln)
+    assert str(tmp_path / "configs") in line, f"`jaxrender presets` says: {line}"
+    run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/local"],
+        cwd=tmp_path, env=env)
+    resolved = (tmp_path / "runs/local/study.toml").read_text()
+    assert str((tmp_path / "configs/paths/pan_slow.toml").resolve()) in resolved, resolved
+    assert "pixels_per_frame = 2.0" in resolved, resolved
