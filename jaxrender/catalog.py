@@ -35,13 +35,15 @@ class Entry:
     name: str
     path: Path
     source: str
+    hides_builtin: bool = False  # a local file named as a built-in one, which it overrides
 
     @property
     def builtin(self) -> bool:
         return self.source == BUILTIN
 
     def describe(self) -> str:
-        return f"{self.source} ({self.path})"
+        note = ", overrides the built-in" if self.hides_builtin else ""
+        return f"{self.source} ({self.path}{note})"
 
 
 def builtin_dir(kind: str) -> Path:
@@ -63,6 +65,15 @@ def _same_dir(a: Path, b: Path) -> bool:
         return False
 
 
+def nearest_configs(start: Path) -> Path | None:
+    """The nearest ``configs/`` folder at or above ``start``."""
+    start = Path(start).resolve()
+    for d in [start, *start.parents]:
+        if (d / "configs").is_dir():
+            return d / "configs"
+    return None
+
+
 def local_configs(start: Path | None = None, explicit: Path | None = None) -> list[Path]:
     """The local configs folders to search, most specific first: ``explicit`` (``--configs``)
     when given, else the nearest ``configs/`` at or above ``start`` (a study file's folder).
@@ -74,13 +85,8 @@ def local_configs(start: Path | None = None, explicit: Path | None = None) -> li
             raise FileNotFoundError(f"configs folder {explicit} not found")
         found = [explicit]
     else:
-        found = []
-        if start is not None:
-            start = Path(start).resolve()
-            for d in [start, *start.parents]:
-                if (d / "configs").is_dir():
-                    found = [d / "configs"]
-                    break
+        nearest = nearest_configs(start) if start is not None else None
+        found = [nearest] if nearest else []
     return [d for d in found if not _same_dir(d, PACKAGE_DIR / "configs")]
 
 
@@ -96,16 +102,18 @@ def entries(kind: str, local: Iterable[Path] = ()) -> dict[str, Entry]:
     found: dict[str, Entry] = {}
     for folder, source in reversed(_folders(kind, list(local))):
         for path in sorted(folder.glob("*.toml")):
-            found[path.stem] = Entry(kind, path.stem, path.resolve(), source)
+            hides = path.stem in found and found[path.stem].builtin
+            found[path.stem] = Entry(kind, path.stem, path.resolve(), source, hides)
     return dict(sorted(found.items()))
 
 
 def find(kind: str, name: str, local: Iterable[Path] = ()) -> Entry | None:
-    for folder, source in _folders(kind, list(local)):
-        path = folder / f"{name}.toml"
-        if path.is_file():
-            return Entry(kind, name, path.resolve(), source)
-    return None
+    hits = [(folder / f"{name}.toml", source) for folder, source in _folders(kind, list(local))
+            if (folder / f"{name}.toml").is_file()]
+    if not hits:
+        return None
+    (path, source), hides = hits[0], len(hits) > 1 and hits[-1][1] == BUILTIN
+    return Entry(kind, name, path.resolve(), source, hides)
 
 
 def available(kind: str, local: Iterable[Path] = ()) -> str:

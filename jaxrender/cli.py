@@ -12,6 +12,7 @@ import sys
 import tomllib
 from pathlib import Path
 
+from jaxrender import catalog
 from jaxrender.bench import add_arguments as bench_arguments  # argparse only: no jax yet
 from jaxrender.errors import StudyError, UserError
 
@@ -47,7 +48,8 @@ def cmd_study(a) -> int:
     from jaxrender.figures import draw_run_figures
     from jaxrender.study import load_study, run_study
 
-    study = load_study(a.file).with_overrides(frames=a.frames, resolution=a.resolution)
+    study = load_study(a.file, configs=a.configs).with_overrides(frames=a.frames,
+                                                                 resolution=a.resolution)
     out = Path(a.out) if a.out else Path("runs") / study.name
     print(f"study {study.name}: {len(study.scenes)} scene(s), {len(study.paths)} camera "
           f"path(s), {len(study.variants)} pipeline variant(s) at {study.resolution[0]}x"
@@ -62,7 +64,7 @@ def cmd_study(a) -> int:
 def cmd_validate(a) -> int:
     from jaxrender.study.schema import load_study
 
-    s = load_study(a.file)
+    s = load_study(a.file, configs=a.configs)
     per_variant = sum(p.frames for p in s.paths) * len(s.scenes)
     frames = per_variant * len(s.variants)
     warm = s.warmup_frames * len(s.paths) * len(s.scenes) * len(s.variants)
@@ -93,9 +95,34 @@ def cmd_scenes(a) -> int:
     width = max((len(n) for n, _ in rows), default=0)
     for name, desc in rows:
         print(f"{name.ljust(width)}  {desc}")
-    files = sorted(Path("configs/scenes").glob("*.toml"))
-    for f in files:
-        print(f"{str(f).ljust(width)}  (scene file)")
+    for entry in catalog.entries("scenes", catalog.local_configs(Path.cwd())).values():
+        print(f"{entry.name.ljust(width)}  (scene file, {entry.describe()})")
+    return 0
+
+
+def cmd_studies(a) -> int:
+    entries = catalog.entries("studies").values()
+    width = max((len(e.name) for e in entries), default=0)
+    for e in entries:
+        description = tomllib.loads(e.path.read_text()).get("description", "")
+        print(f"{e.name.ljust(width)}  {description}")
+    print("\nrun one with `jaxrender study NAME` (writes runs/NAME under this folder)")
+    return 0
+
+
+def cmd_presets(a) -> int:
+    try:
+        local = catalog.local_configs(Path.cwd(), a.configs)
+    except FileNotFoundError as e:
+        raise UserError(f"--configs: {e}") from None
+    for kind in ("paths", "pipelines", "scenes"):
+        entries = catalog.entries(kind, local).values()
+        print(f"{catalog.KINDS[kind]}s ({kind}):")
+        width = max((len(e.name) for e in entries), default=0)
+        for e in entries:
+            print(f"  {e.name.ljust(width)}  {e.describe()}")
+        if not entries:
+            print("  (none)")
     return 0
 
 
@@ -201,7 +228,9 @@ def _add_study(sub) -> None:
         "Render every (scene, camera path, pipeline variant, frame) of a study, score it "
         "against the cached reference, time it, and write results.jsonl, results.csv, the "
         "resolved config and the figures. Rerunning resumes; --force recomputes."))
-    s.add_argument("file", help="the study TOML file, e.g. studies/quickstart.toml")
+    s.add_argument("file", help="a study TOML file (e.g. studies/quickstart.toml) or a bundled "
+                   "study's name (e.g. quickstart; `jaxrender studies` lists them)")
+    _configs_argument(s)
     s.add_argument("--out", help="output directory (default runs/NAME)")
     s.add_argument("--frames", type=_positive, help="frames per camera path (overrides)")
     s.add_argument("--resolution", type=_resolution, help="WxH (overrides)")
@@ -211,12 +240,31 @@ def _add_study(sub) -> None:
     s.set_defaults(fn=cmd_study)
 
 
+def _configs_argument(s) -> None:
+    s.add_argument("--configs", type=Path, metavar="DIR", help=(
+        "a configs folder (holding paths/, pipelines/, scenes/) whose presets add to and "
+        "override the built-ins (default: the nearest configs/ at or above the study file)"))
+
+
 def _add_inspection(sub) -> None:
     """validate, figures, scenes, pipelines: commands that render nothing."""
     s = sub.add_parser("validate", help="check a study file without running it",
                        description="Validate a study file and print what it would render.")
-    s.add_argument("file")
+    s.add_argument("file", help="a study TOML file or a bundled study's name")
+    _configs_argument(s)
     s.set_defaults(fn=cmd_validate)
+
+    s = sub.add_parser("studies", help="list the bundled studies",
+                       description="List the studies that ship with jaxrender, one line each.")
+    s.set_defaults(fn=cmd_studies)
+
+    s = sub.add_parser("presets", help="list the presets and where each comes from",
+                       description=("List the camera path presets, pipeline presets and scene "
+                                    "files: the built-in ones and those of a local configs/ "
+                                    "folder (the nearest at or above this folder, or "
+                                    "--configs), which override built-ins of the same name."))
+    _configs_argument(s)
+    s.set_defaults(fn=cmd_presets)
 
     s = sub.add_parser("figures", help="redraw the figures of a run directory",
                        description="Redraw the figures from stored results, without rendering.")
@@ -226,7 +274,8 @@ def _add_inspection(sub) -> None:
     s.set_defaults(fn=cmd_figures)
 
     s = sub.add_parser("scenes", help="list the built-in scenes",
-                       description="List the built-in scenes and scene files in configs/scenes.")
+                       description="List the built-in scenes and the scene files (built-in, "
+                       "and those of the nearest local configs/scenes).")
     s.set_defaults(fn=cmd_scenes)
 
     s = sub.add_parser("pipelines", help="list the registered pipelines",

@@ -1,10 +1,16 @@
-"""The package as a user installs it: a wheel (not editable) in a fresh virtual environment,
-used from a folder outside the repository. Built-in presets, scene files and studies must be
-found from there, and a local ``configs/`` must override them."""
+"""The package as a user meets it: the README's Python example, run as written, and a wheel
+(not editable) in a fresh virtual environment, used from a folder outside the repository,
+where built-in presets, scene files and studies must be found and a local ``configs/`` must
+override them.
+
+Every run here shares one jaxrender cache (references and compiled programs), so what the
+README example compiles, the installed command line loads."""
 
 from __future__ import annotations
 
+import math
 import os
+import re
 import subprocess
 import sys
 import sysconfig
@@ -55,6 +61,29 @@ def run(args, cwd, env, timeout=900):
 
 
 @pytest.fixture(scope="module")
+def shared_cache(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("cache")
+
+
+def readme_python_example() -> str:
+    text = (REPO / "README.md").read_text()
+    section = text.split("\n## In Python\n", 1)[1]
+    return section.split("```python\n", 1)[1].split("```", 1)[0]
+
+
+def test_readme_python_example_runs_as_written(shared_cache, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("JAXRENDER_CACHE", str(shared_cache))
+    monkeypatch.chdir(tmp_path)
+    names: dict = {}
+    exec(compile(readme_python_example(), "README.md (In Python)", "exec"), names)
+    assert names["frames"].image.shape == (8, 72, 128, 3), names["frames"].image.shape
+    assert math.isfinite(names["psnr"]) and names["psnr"] > 10, names["psnr"]
+    assert names["run"].rows and (tmp_path / "runs/quickstart/results.csv").is_file()
+    printed = capsys.readouterr().out
+    assert re.search(r"\d+ shaded pixels, \d+\.\d dB", printed), printed
+
+
+@pytest.fixture(scope="module")
 def wheel(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("wheel")
     run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", "-w", str(out),
@@ -64,7 +93,7 @@ def wheel(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def installed(wheel, tmp_path_factory):
+def installed(wheel, shared_cache, tmp_path_factory):
     """A fresh venv holding the wheel; its dependencies come from this interpreter's
     site-packages, appended to its path (a .pth line adds the folder without running the
     editable install's hooks in it, so the checkout itself is not importable there)."""
@@ -79,7 +108,7 @@ def installed(wheel, tmp_path_factory):
          str(wheel)], cwd=venv, env=os.environ.copy())
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env["PATH"] = f"{bin_dir}{os.pathsep}{env.get('PATH', '')}"
-    env["JAXRENDER_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    env["JAXRENDER_CACHE"] = str(shared_cache)
     return bin_dir, env
 
 
@@ -100,16 +129,6 @@ def test_installed_package_imports_from_its_venv(installed, tmp_path):
         f"jaxrender imported from {where}, not from the fresh venv {bin_dir.parent}")
 
 
-def test_builtin_presets_from_outside_the_repository(installed, tmp_path):
-    bin_dir, env = installed
-    (tmp_path / "outside.toml").write_text(STUDY)
-    run([bin_dir / "jaxrender", "validate", "outside.toml"], cwd=tmp_path, env=env)
-    run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/outside"],
-        cwd=tmp_path, env=env)
-    resolved = (tmp_path / "runs/outside/study.toml").read_text()
-    assert "built-in" in resolved and "pan_slow" in resolved, resolved
-
-
 def test_bundled_study_by_name_writes_under_the_working_directory(installed, tmp_path):
     bin_dir, env = installed
     listing = run([bin_dir / "jaxrender", "studies"], cwd=tmp_path, env=env)
@@ -120,16 +139,27 @@ def test_bundled_study_by_name_writes_under_the_working_directory(installed, tmp
     assert len(rows) > 1, f"no result rows in runs/quickstart/results.csv: {rows}"
 
 
-def test_local_configs_override_a_builtin_preset(installed, tmp_path):
+def test_builtin_presets_then_a_local_override(installed, tmp_path):
     bin_dir, env = installed
-    (tmp_path / "configs/paths").mkdir(parents=True)
-    (tmp_path / "configs/paths/pan_slow.toml").write_text(LOCAL_PAN)
     (tmp_path / "outside.toml").write_text(STUDY)
+    run([bin_dir / "jaxrender", "validate", "outside.toml"], cwd=tmp_path, env=env)
+    run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/outside"],
+        cwd=tmp_path, env=env)
+    resolved = (tmp_path / "runs/outside/study.toml").read_text()
+    assert "# preset 'pan_slow': built-in (" in resolved, resolved
+    assert "# preset 'dacs_threshold_sweep': built-in (" in resolved, resolved
+
+    (tmp_path / "configs/paths").mkdir(parents=True)
+    local = tmp_path / "configs/paths/pan_slow.toml"
+    local.write_text(LOCAL_PAN)
     listing = run([bin_dir / "jaxrender", "presets"], cwd=tmp_path, env=env)
     line = next(ln for ln in listing.splitlines() if "pan_slow" in ln)
-    assert str(tmp_path / "configs") in line, f"`jaxrender presets` says: {line}"
-    run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/local"],
-        cwd=tmp_path, env=env)
+    assert str(local.resolve()) in line, f"`jaxrender presets` says: {line}"
+    log = run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/local",
+               "--no-progress"], cwd=tmp_path, env=env)
     resolved = (tmp_path / "runs/local/study.toml").read_text()
-    assert str((tmp_path / "configs/paths/pan_slow.toml").resolve()) in resolved, resolved
+    assert (f"# preset 'pan_slow': {(tmp_path / 'configs').resolve()} ({local.resolve()}, "
+            "overrides the built-in)") in resolved, resolved
     assert "pixels_per_frame = 2.0" in resolved, resolved
+    # The same programs as the first run (cameras are arguments, not constants): all loaded.
+    assert re.search(r"compilation cache: \d+ loaded, 0 compiled", log), log

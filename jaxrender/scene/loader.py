@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from jaxrender import catalog
 from jaxrender.scene.builtin import BUILTINS, builtin_scene
 from jaxrender.scene.camera import look_at
 from jaxrender.scene.config import load_scene_toml
@@ -14,7 +15,7 @@ from jaxrender.scene.lights import make_lights
 from jaxrender.scene.mesh_io import load_mesh_file
 from jaxrender.scene.scene import Scene, build_scene, with_effects
 
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs" / "scenes"
+CONFIG_DIR = catalog.builtin_dir("scenes")
 MESH_SUFFIXES = {".obj", ".ply", ".glb", ".gltf", ".stl", ".off"}
 
 

@@ -26,14 +26,18 @@ from jaxrender.version import VERSION
 _CODE_DIRS = ("raster", "shading", "scene", "pipelines")
 
 
-def cache_dir() -> Path:
+def cache_root() -> Path:
+    """jaxrender's cache folder: ``$JAXRENDER_CACHE``, else ``$XDG_CACHE_HOME/jaxrender``."""
     env = os.environ.get("JAXRENDER_CACHE")
     if env:
-        base = Path(env)
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME")
-        base = (Path(xdg) if xdg else Path.home() / ".cache") / "jaxrender"
-    return base / "reference"
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "jaxrender"
+
+
+def cache_dir() -> Path:
+    """Where reference frames are kept."""
+    return cache_root() / "reference"
 
 
 @functools.lru_cache(maxsize=1)

@@ -14,6 +14,7 @@ import threading
 from pathlib import Path
 
 import jax
+from jax.experimental.compilation_cache import compilation_cache
 
 from jaxrender.study.cache import cache_root
 
@@ -23,6 +24,7 @@ _EVENTS = {"/jax/compilation_cache/cache_hits": "hits",
 _counts = {"hits": 0, "misses": 0}
 _lock = threading.Lock()
 _listening = False
+_ours: str | None = None  # the folder this module set (a user's own setting is left alone)
 
 
 def default_dir() -> Path:
@@ -38,16 +40,19 @@ def _count(event: str, **_) -> None:
 
 def enable(directory: Path | None = None) -> Path | None:
     """Turn the persistent cache on (idempotent); the folder used, or None when it is off."""
-    global _listening
+    global _listening, _ours
     if os.environ.get(ENV_OFF, "").strip().lower() in ("0", "false", "no", "off"):
         return None
     current = jax.config.values.get("jax_compilation_cache_dir")
-    if current and directory is None:
+    if current and current != _ours and directory is None:
         folder = Path(current)
     else:
         folder = Path(directory) if directory is not None else default_dir()
         folder.mkdir(parents=True, exist_ok=True)
-        jax.config.update("jax_compilation_cache_dir", str(folder))
+        if str(folder) != current:
+            jax.config.update("jax_compilation_cache_dir", str(folder))
+            compilation_cache.reset_cache()  # JAX opens its cache folder once per process
+        _ours = str(folder)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
     if not _listening:
@@ -60,3 +65,13 @@ def counts() -> dict:
     """Programs found in (hits) and added to (misses) the cache by this process so far."""
     with _lock:
         return dict(_counts)
+
+
+def describe(before: dict) -> str:
+    """``" (compilation cache: 3 loaded, 9 compiled)"`` since ``before`` (this process only:
+    programs compiled in worker processes are not counted), or "" when nothing was asked."""
+    now = counts()
+    hits, misses = now["hits"] - before["hits"], now["misses"] - before["misses"]
+    if not (hits or misses):
+        return ""
+    return f" (compilation cache: {hits} loaded, {misses} compiled)"

@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from jaxrender import timing
 from jaxrender.pipelines.program import PipelineOverflow, stack_cameras
-from jaxrender.study import backend, cache, store, summary
+from jaxrender.study import backend, cache, compile_cache, store, summary
 from jaxrender.study.programs import (COMPILE_WORKERS, compile_all, compile_variant,
                                       program_key, rendered_path)
 from jaxrender.study.references import reference_frames
@@ -176,6 +176,7 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     (``force``: recompute all), then export results.csv and summary.csv. Draws no figures."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    compile_cache.enable()
     env = timing.environment()
     _write_run_files(study, out_dir, env)
     st = store.ResultStore(out_dir / "results.jsonl", force=force)
@@ -221,10 +222,11 @@ def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log)
                 cams[spec.label, path.name] = backend.make_cameras(
                     scenes[spec.label], rendered_path(study, path), *study.resolution)
         bar.set_description("compiling; references")
-        t0 = time.perf_counter()
+        t0, before = time.perf_counter(), compile_cache.counts()
         compiled = compile_all(study, todo, scenes, cams)
         log(f"compiled {len(compiled)} program(s) with {COMPILE_WORKERS} worker(s) and "
-            f"rendered the references in {time.perf_counter() - t0:.1f} s")
+            f"rendered the references in {time.perf_counter() - t0:.1f} s"
+            f"{compile_cache.describe(before)}")
         t0 = time.perf_counter()
         for spec in study.scenes:
             for path in study.paths:

@@ -2,9 +2,10 @@
 
 Every error names the file and the key path (``studies/x.toml: pipelines[2].sweep.threshold:
 expected a non-empty list``). A study composes reusable configs: scenes are built-in names or
-files under ``configs/scenes/``, camera paths may be presets from ``configs/paths/`` and
-pipelines presets from ``configs/pipelines/``. Sweeps are explicit lists, combined as a
-cartesian product or zipped. See ``studies/quickstart.toml`` for a commented example.
+scene files, camera paths may be presets and pipelines presets, each found by name in a local
+``configs/{scenes,paths,pipelines}/`` (beside the study, or ``--configs DIR``) and then among
+the built-ins (``jaxrender.catalog``). Sweeps are explicit lists, combined as a cartesian
+product or zipped. See ``studies/quickstart.toml`` for a commented example.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import hashlib
 import itertools
 from pathlib import Path
 
+from jaxrender import catalog
 from jaxrender.errors import StudyError, UserError
 from jaxrender.metrics import METRICS
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
@@ -25,33 +27,26 @@ from jaxrender.study.tables import (Checker, type_name, key_path, read_table, re
                                     shown_path)
 
 
-def find_config_root(start: Path) -> Path:
-    """The nearest directory at or above ``start`` holding ``configs/``, else the cwd."""
-    for d in [start, *start.parents]:
-        if (d / "configs").is_dir():
-            return d
-    return Path.cwd()
-
-
 def _frozen(params: dict) -> tuple:
     return tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in params.items()))
 
 
-def with_preset(ck: Checker, item: dict, path: str, root: Path, cls, kind: str,
-                name_key: str, fixed=()) -> dict:
-    """A study entry merged over its preset ``configs/<kind>/<preset>.toml`` (the entry's
-    ``params`` and ``sweep`` tables merged key by key over the preset's; ``name_key`` defaults
-    to the preset's name). The preset's own mistakes are named in its file; a key in
-    ``fixed`` may not differ between the entry and its preset."""
+def with_preset(ck: Checker, item: dict, path: str, local, cls, kind: str,
+                name_key: str, fixed=()) -> tuple[dict, str]:
+    """A study entry merged over its preset ``<kind>/<preset>.toml`` (local configs first,
+    then the built-ins; the entry's ``params`` and ``sweep`` tables merged key by key over the
+    preset's; ``name_key`` defaults to the preset's name), and where the preset came from
+    ("" without one). The preset's own mistakes are named in its file; a key in ``fixed`` may
+    not differ between the entry and its preset."""
     if "preset" not in item:
-        return dict(item)
+        return dict(item), ""
     preset = ck.str_(item["preset"], f"{path}.preset")
-    pfile = root / "configs" / kind / f"{preset}.toml"
+    entry = catalog.find(kind, preset, local)
     what = "camera path" if kind == "paths" else "pipeline"
-    if not pfile.is_file():
-        avail = sorted(p.stem for p in (root / "configs" / kind).glob("*.toml"))
-        ck.fail(f"{path}.preset", f"no {what} preset {preset!r} in configs/{kind}; "
-                f"available: {', '.join(avail) or '(none)'}")
+    if entry is None:
+        ck.fail(f"{path}.preset", f"no {what} preset {preset!r}; available: "
+                f"{catalog.available(kind, local)}")
+    pfile = entry.path
     pck = Checker(shown_path(pfile))
     merged = read_toml(pfile, pck.file)
     pck.keys(merged, "", _keys(cls, kind) - {"preset", name_key}, required=fixed)
@@ -68,7 +63,7 @@ def with_preset(ck: Checker, item: dict, path: str, root: Path, cls, kind: str,
             merged[k] = {**merged.get(k, {}), **ck.table(v, f"{path}.{k}")}
         elif k != "preset":
             merged[k] = v
-    return merged
+    return merged, f"preset {preset!r}: {entry.describe()}"
 
 
 # ------------------------------------------------------------------ parameter checking
@@ -116,7 +111,7 @@ _ENTRY_KEYS = {  # the keys a study's entries accept besides their spec's fields
 }
 
 
-def _scene(ck: Checker, item, path: str, root: Path, study_dir: Path) -> SceneSpec:
+def _scene(ck: Checker, item, path: str, local, study_dir: Path) -> SceneSpec:
     if isinstance(item, str):
         item = {"name": item}
     d = read_table(ck, item, path, SceneSpec, extra=_ENTRY_KEYS["scenes"],
@@ -126,7 +121,7 @@ def _scene(ck: Checker, item, path: str, root: Path, study_dir: Path) -> SceneSp
     name = ck.str_(d["name"], f"{path}.name")
     label = ck.str_(d["label"] or Path(name).stem, f"{path}.label")
     params = dict(d["params"])
-    file = _scene_file(ck, name, path, root, study_dir)
+    file = _scene_file(ck, name, path, local, study_dir)
     for k, v in params.items():
         if isinstance(v, (dict, list)) and not (isinstance(v, list) and v):
             ck.fail(f"{path}.params.{k}", f"expected a value, got {type_name(v)}")
@@ -143,30 +138,34 @@ def _scene(ck: Checker, item, path: str, root: Path, study_dir: Path) -> SceneSp
     return SceneSpec(label, str(file) if file else name, _frozen(params), digest)
 
 
-def _scene_file(ck: Checker, name: str, path: str, root: Path, study_dir: Path):
-    """The scene file ``name`` names, or None for a built-in scene."""
-    scenes_dir = root / "configs" / "scenes"
+def _scene_file(ck: Checker, name: str, path: str, local, study_dir: Path):
+    """The scene file ``name`` names (a path relative to the study or to a local configs
+    folder's parent, or the stem of a scene file in a configs folder), or None for a built-in
+    scene."""
     if name.endswith(".toml") or "/" in name:
-        for cand in (study_dir / name, root / name):
+        nearest = catalog.nearest_configs(study_dir)
+        bases = [study_dir, *(Path(d).parent for d in local),
+                 *([nearest.parent] if nearest else []), Path.cwd()]
+        for cand in (b / name for b in bases):
             if cand.is_file():
                 return cand.resolve()
         ck.fail(f"{path}.name", f"scene file {name!r} not found")
-    if (scenes_dir / f"{name}.toml").is_file():
-        return (scenes_dir / f"{name}.toml").resolve()
+    entry = catalog.find("scenes", name, local)
+    if entry is not None:
+        return entry.path
     builtins = backend.builtin_scene_names()
     if name not in builtins:
-        files = sorted(p.stem for p in scenes_dir.glob("*.toml"))
         ck.fail(f"{path}.name", f"unknown scene {name!r}; built-in scenes: "
-                f"{', '.join(builtins) or '(none)'}; scene files in configs/scenes: "
-                f"{', '.join(files) or '(none)'}")
+                f"{', '.join(builtins) or '(none)'}; scene files: "
+                f"{catalog.available('scenes', local)}")
     return None
 
 
-def _path(ck: Checker, item, path: str, root: Path, default_frames: int) -> PathSpec:
+def _path(ck: Checker, item, path: str, local, default_frames: int) -> PathSpec:
     if isinstance(item, str):
         item = {"preset": item}
     ck.keys(ck.table(item, path), path, _keys(PathSpec, "paths"))
-    merged = with_preset(ck, item, path, root, PathSpec, "paths", "name")
+    merged, source = with_preset(ck, item, path, local, PathSpec, "paths", "name")
     d = read_table(ck, merged, path, PathSpec, extra=_ENTRY_KEYS["paths"],
                    defaults={"name": None, "frames": default_frames},
                    hint=" (or a 'preset' that sets it)")
@@ -191,7 +190,7 @@ def _path(ck: Checker, item, path: str, root: Path, default_frames: int) -> Path
     for k, p in declared.items():
         if p.default is REQUIRED and k not in params:
             ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
-    return PathSpec(name, ptype, d["frames"], _frozen(params))
+    return PathSpec(name, ptype, d["frames"], _frozen(params), source)
 
 
 def _keys(cls, kind: str) -> set:
@@ -234,10 +233,10 @@ def _sweep(ck: Checker, path: str, ptype: str, raw: dict, fixed: dict, resolutio
     return sweep
 
 
-def _pipeline(ck: Checker, item, path: str, root: Path, resolution) -> PipelineSpec:
+def _pipeline(ck: Checker, item, path: str, local, resolution) -> PipelineSpec:
     ck.keys(ck.table(item, path), path, _keys(PipelineSpec, "pipelines"))
-    merged = with_preset(ck, item, path, root, PipelineSpec, "pipelines", "label",
-                         fixed=("type",))
+    merged, source = with_preset(ck, item, path, local, PipelineSpec, "pipelines", "label",
+                                 fixed=("type",))
     d = read_table(ck, merged, path, PipelineSpec, extra=_ENTRY_KEYS["pipelines"],
                    defaults={"label": None}, hint=" (or a 'preset' that sets it)")
     ptype = _pipeline_type(ck, d["type"], f"{path}.type")
@@ -254,7 +253,7 @@ def _pipeline(ck: Checker, item, path: str, root: Path, resolution) -> PipelineS
         except (TypeError, ValueError, KeyError) as e:
             ck.fail(f"{path}.sweep", f"pipeline {ptype!r} rejects {v.params_json}: {e}")
     return PipelineSpec(label, ptype, tuple(sorted(fixed.items())), tuple(sweep.items()),
-                        mode, variants)
+                        mode, variants, source)
 
 
 def _reference(ck: Checker, raw, resolution) -> ReferenceSpec:
@@ -278,16 +277,33 @@ def _unique(ck: Checker, specs, attr: str, section: str, what: str, fix: str = "
 # ------------------------------------------------------------------ entry points
 
 
-def load_study(file, *, config_root: Path | None = None) -> Study:
-    """Read and validate a study file; StudyError names the file and key on any mistake."""
-    p = Path(file)
-    data = read_toml(p, str(file))
-    return parse_study(data, str(file), study_dir=p.resolve().parent, config_root=config_root)
+def study_file(name_or_file) -> Path:
+    """A study file's path: an existing file as given, else a bundled study of that name."""
+    p = Path(name_or_file)
+    if p.is_file() or p.suffix == ".toml" or len(p.parts) > 1:
+        return p
+    entry = catalog.find("studies", str(name_or_file))
+    if entry is None:
+        raise UserError(f"{name_or_file}: neither a study file nor a bundled study; bundled "
+                        f"studies: {catalog.available('studies')}")
+    return entry.path
 
 
-def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | None = None):
+def load_study(file, *, configs: Path | None = None) -> Study:
+    """Read and validate a study file (or a bundled study, by name); StudyError names the
+    file and key on any mistake. ``configs``: a local configs folder to use instead of the
+    one found beside the study."""
+    p = study_file(file)
+    data = read_toml(p, str(p))
+    return parse_study(data, str(p), study_dir=p.resolve().parent, configs=configs)
+
+
+def parse_study(data: dict, file: str, *, study_dir: Path, configs: Path | None = None):
     ck = Checker(file)
-    root = config_root or find_config_root(study_dir)
+    try:
+        local = catalog.local_configs(study_dir, configs)
+    except FileNotFoundError as e:
+        raise UserError(f"--configs: {e}") from None
     d = read_table(ck, data, "", Study, extra={"frames": 1},
                    defaults={"name": Path(file).stem, "metrics": list(METRICS),
                              "figures": list(FIGURES), "save_frames": [0]})
@@ -307,16 +323,16 @@ def parse_study(data: dict, file: str, *, study_dir: Path, config_root: Path | N
     save_frames = tuple(sorted({ck.int_(v, f"save_frames[{i}]", lo=0)
                                 for i, v in enumerate(save)}))
     timing = TimingSpec(**read_table(ck, d["timing"], "timing", TimingSpec))
-    scenes = _unique(ck, [_scene(ck, item, f"scenes[{i}]", root, study_dir) for i, item in
+    scenes = _unique(ck, [_scene(ck, item, f"scenes[{i}]", local, study_dir) for i, item in
                           enumerate(ck.list_(d["scenes"], "scenes"))],
                      "label", "scenes", "scene label", "; set `label`")
     if d["paths"] is None:
         paths = (PathSpec("static", "static", frames),)
     else:
-        paths = _unique(ck, [_path(ck, item, f"paths[{i}]", root, frames) for i, item in
+        paths = _unique(ck, [_path(ck, item, f"paths[{i}]", local, frames) for i, item in
                              enumerate(ck.list_(d["paths"], "paths"))],
                         "name", "paths", "camera path name")
-    pipelines = _unique(ck, [_pipeline(ck, item, f"pipelines[{i}]", root, resolution)
+    pipelines = _unique(ck, [_pipeline(ck, item, f"pipelines[{i}]", local, resolution)
                              for i, item in enumerate(ck.list_(d["pipelines"], "pipelines"))],
                         "label", "pipelines", "pipeline label",
                         "; give each entry a distinct `label`")

@@ -51,6 +51,8 @@ class PathSpec:
     type: str
     frames: int = _field(lo=1)
     params: tuple[tuple[str, Any], ...] = _field((), table=True)
+    # Where its preset came from (recorded in the resolved study.toml); not part of equality.
+    origin: str = field(default="", compare=False, metadata={"toml": False})
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,7 @@ class PipelineSpec:
     sweep: tuple[tuple[str, tuple], ...] = _field((), table=True)
     sweep_mode: str = "cartesian"
     variants: tuple[Variant, ...] = _field((), toml=False)
+    origin: str = field(default="", compare=False, metadata={"toml": False})
 
 
 @dataclass(frozen=True)
@@ -186,5 +189,6 @@ def to_toml(study: Study) -> str:
     for section in ("scenes", "paths", "pipelines"):
         for spec in getattr(study, section):
             extra = {"name": spec.source} if section == "scenes" else {}
-            lines += ["", f"[[{section}]]", *_fields_toml(spec, **extra)]
+            origin = [f"# {spec.origin}"] if getattr(spec, "origin", "") else []
+            lines += ["", f"[[{section}]]", *origin, *_fields_toml(spec, **extra)]
     return "\n".join(lines) + "\n"

@@ -212,3 +212,4 @@ def test_real_metrics(fake, tiny_study, tmp_path, monkeypatch):
     coarse = [r["psnr"] for r in res.rows if r["pipeline"] == "coarse"]
     fine = [r["psnr"] for r in res.rows if r["params"] == {"levels": 16}]
     assert max(coarse) < min(fine)  # fewer quantisation levels, lower PSNR
+

@@ -185,3 +185,55 @@ def test_bad_override(fake):
         s.with_overrides(resolution="10")
     with pytest.raises(UserError, match="MSSIM needs"):
         s.with_overrides(resolution="10x10")
+
+
+def test_builtin_presets_are_found_with_no_local_configs(tmp_path):
+    # A study outside any checkout: pan_slow and dacs_threshold_sweep come from the package.
+    p = tmp_path / "own.toml"
+    p.write_text(textwrap.dedent("""
+        resolution = "24x16"
+        scenes = ["courtyard"]
+        paths = [{ preset = "pan_slow", frames = 2 }]
+        [[pipelines]]
+        preset = "dacs_threshold_sweep"
+        """))
+    s = load_study(p)
+    assert (s.paths[0].type, s.paths[0].frames) == ("pan", 2)
+    assert len(s.variants) == 5 and {v.type for v in s.variants} == {"dacs"}
+    assert s.scenes[0].source.endswith("configs/scenes/courtyard.toml"), s.scenes[0].source
+    text = to_toml(s)
+    assert "# preset 'pan_slow': built-in (" in text, text
+    assert "# preset 'dacs_threshold_sweep': built-in (" in text, text
+
+
+def test_local_preset_overrides_builtin_and_is_recorded(tmp_path):
+    (tmp_path / "configs" / "paths").mkdir(parents=True)
+    local = tmp_path / "configs" / "paths" / "pan_slow.toml"
+    local.write_text('type = "pan"\nframes = 3\n[params]\npixels_per_frame = 2.0\n')
+    p = tmp_path / "own.toml"
+    p.write_text('resolution = "24x16"\nscenes = ["spheres"]\npaths = ["pan_slow"]\n'
+                 '[[pipelines]]\ntype = "deferred"\n')
+    s = load_study(p)
+    assert dict(s.paths[0].params) == {"pixels_per_frame": 2.0}, s.paths[0]
+    assert (f"# preset 'pan_slow': {tmp_path / 'configs'} ({local}, overrides the built-in)"
+            in to_toml(s)), to_toml(s)
+    # --configs names another folder, which replaces the one beside the study
+    other = tmp_path / "elsewhere"
+    (other / "paths").mkdir(parents=True)
+    assert dict(load_study(p, configs=other).paths[0].params) == {"pixels_per_frame": 0.5}
+    with pytest.raises(UserError, match="--configs: configs folder .*nope not found"):
+        load_study(p, configs=tmp_path / "nope")
+
+
+def test_unknown_preset_lists_builtin_and_local(fake):
+    with pytest.raises(StudyError) as e:
+        load_study(_write(fake, BASE + '[[paths]]\npreset = "zoom"\n'))
+    msg = str(e.value)
+    assert "pan_slow" in msg and "slowpan (local)" in msg, msg
+
+
+def test_bundled_study_by_name():
+    s = load_study("quickstart")
+    assert s.name == "quickstart" and s.file.endswith("studies/quickstart.toml"), s.file
+    with pytest.raises(UserError, match="bundled studies: .*quickstart"):
+        load_study("no_such_study")
