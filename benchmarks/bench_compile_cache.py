@@ -5,7 +5,7 @@ processes or in threads, from an empty cache (first run) and again with ``--forc
 reference and executable cached). Prints the wall time of each run and the study's own
 "compiled ... in N s" line. Usage:
 
-    python benchmarks/bench_compile_cache.py [--study studies/quickstart.toml] [--workers N]
+    python benchmarks/bench_compile_cache.py [--study studies/quickstart.toml] [--frames N]
 """
 
 from __future__ import annotations
@@ -22,11 +22,12 @@ from pathlib import Path
 COMPILED = re.compile(r"compiled (\d+) program\(s\).* in ([\d.]+) s")
 
 
-def one_run(study: str, out: Path, cache: Path, processes: bool, force: bool) -> dict:
+def one_run(study: str, out: Path, cache: Path, processes: bool, force: bool,
+            extra: list[str]) -> dict:
     env = dict(os.environ, JAXRENDER_CACHE=str(cache),
                JAXRENDER_COMPILE_PROCESSES="1" if processes else "0")
     args = [sys.executable, "-m", "jaxrender", "study", study, "--out", str(out),
-            "--no-progress", "--no-figures"] + (["--force"] if force else [])
+            "--no-progress", "--no-figures", *extra] + (["--force"] if force else [])
     start = time.perf_counter()
     done = subprocess.run(args, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - start
@@ -40,7 +41,9 @@ def one_run(study: str, out: Path, cache: Path, processes: bool, force: bool) ->
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--study", default="studies/quickstart.toml")
+    ap.add_argument("--frames", help="override every path's frame count")
     args = ap.parse_args()
+    extra = ["--frames", args.frames] if args.frames else []
     print(f"study {args.study}; {os.cpu_count()} CPU cores")
     print(f"{'compile in':10s} {'cache':6s} {'programs':>8s} {'compile phase s':>15s} "
           f"{'wall s':>7s}")
@@ -49,7 +52,7 @@ def main() -> None:
             mode = "processes" if processes else "threads"
             cache, out = Path(tmp) / mode / "cache", Path(tmp) / mode / "run"
             for label, force in (("empty", False), ("warm", True)):
-                r = one_run(args.study, out, cache, processes, force)
+                r = one_run(args.study, out, cache, processes, force, extra)
                 print(f"{mode:10s} {label:6s} {r['programs'] or '-':>8} "
                       f"{r['compile_phase_s'] or float('nan'):15.1f} {r['wall_s']:7.1f}",
                       flush=True)
