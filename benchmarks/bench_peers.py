@@ -47,7 +47,7 @@ import numpy as np
 from jaxrender.bench.raster import static_args, terrain_camera, terrain_clip
 from jaxrender.bench.timing import dump, environment, print_table, time_compiled
 from jaxrender.raster import rasterize_clip, rasterize_depth_clip
-from jaxrender.raster.rasterize import _rasterize_donating, _rasterize_program
+from jaxrender.raster.rasterize import rasterize_donating, rasterize_program
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.raster.test_meshes import terrain
 
@@ -93,7 +93,7 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
     static = static_args(faces.shape[0], width, height)
     for suffix, bary, entry in (("", True, rasterize_clip), ("_depth", False, rasterize_depth_clip)):
         t0 = time.perf_counter()
-        compiled = _rasterize_program.lower(clip, faces, barycentrics=bary, **static).compile()
+        compiled = rasterize_program.lower(clip, faces, barycentrics=bary, **static).compile()
         out[f"jaxrender{suffix}_compile_s"] = time.perf_counter() - t0
         per = []
         for _ in range(max(3, repeats // 20)):
@@ -106,7 +106,7 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
         out[f"jaxrender{suffix}_batched_ms"] = 1e3 * statistics.median(per)
         first = compiled(clip, faces)
         steps[f"jaxrender{suffix}_ms"] = lambda _, c=compiled: c(clip, faces)
-        steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, b=bary, f=first: _rasterize_donating(
+        steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, b=bary, f=first: rasterize_donating(
             clip, faces, f if prev is None else prev, barycentrics=b, **static)
         steps[f"jaxrender{suffix}_public_loop_ms"] = lambda prev, e=entry: e(
             clip, faces, width, height, donate=prev)

@@ -24,9 +24,9 @@ from common import dump, environment, print_table, time_jitted  # noqa: E402
 
 from jaxrender.raster import rasterize_clip  # noqa: E402
 from jaxrender.raster.rasterize import (  # noqa: E402
-    _rasterize_program,
     default_clip_capacity,
     default_work_capacity,
+    rasterize_program,
 )
 from jaxrender.raster.samples import CENTER, to_fixed  # noqa: E402
 from jaxrender.raster.setup import SUBPIXEL_BITS, setup_triangles  # noqa: E402
@@ -110,7 +110,7 @@ def main(argv=None) -> int:
     for width, height, n in PRESETS[args.preset]:
         clip, faces = scene(n, width, height)
         st = static_args(faces.shape[0], width, height)
-        r = time_jitted(_rasterize_program, clip, faces, repeats=args.repeats, **st)
+        r = time_jitted(rasterize_program, clip, faces, repeats=args.repeats, **st)
         vis = r.pop("out")
         row = dict(resolution=f"{width}x{height}", triangles=int(faces.shape[0]), **r,
                    fragments=int(vis.counts["fragments"]), work_items=int(vis.counts["work_items"]),
@@ -132,7 +132,7 @@ def main(argv=None) -> int:
         ids = r.pop("out")
         times = [r["median_ms"] / 1e3]
         st = static_args(faces.shape[0], bw, bh)
-        r = time_jitted(_rasterize_program, clip, faces, repeats=args.repeats, **st)
+        r = time_jitted(rasterize_program, clip, faces, repeats=args.repeats, **st)
         vis = r.pop("out")
         agree = float(np.mean(np.asarray(ids) == np.asarray(vis.tri_id)))
         rows.append(dict(resolution=f"{bw}x{bh}", triangles=int(faces.shape[0]),

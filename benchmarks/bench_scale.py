@@ -141,9 +141,10 @@ def main(argv=None) -> int:
                         a.frames, a.repeats, a.chunk, lambda x: x))
     if a.pipelines:
         from jaxrender.pipelines import get_pipeline, make_config
-        from jaxrender.scene import default_camera, load_scene
+        from jaxrender.scene import default_camera
+        from jaxrender.shading import load_lit_scene
 
-        scene = load_scene(a.scene)
+        scene = load_lit_scene(a.scene)
         cam = default_camera(scene)
         pos = np.asarray(scene.positions, np.float64)
         c = 0.5 * (pos.min(0) + pos.max(0))  # orbit the scene's bounding-box centre

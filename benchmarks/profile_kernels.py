@@ -146,10 +146,10 @@ def main(argv=None) -> int:
     if args.what == "raster":
         from bench_raster import scene, static_args
 
-        from jaxrender.raster.rasterize import _rasterize
+        from jaxrender.raster.rasterize import rasterize_traced
 
         clip, faces = scene(args.triangles, w, h)
-        fn = jax.jit(lambda c, f: _rasterize(c, f, **static_args(faces.shape[0], w, h),
+        fn = jax.jit(lambda c, f: rasterize_traced(c, f, **static_args(faces.shape[0], w, h),
                                              traversal=args.traversal))
         profile_call(fn, clip, faces, calls=args.calls, top=args.top,
                      label=f"raster {w}x{h} {faces.shape[0]} triangles ({args.traversal})")

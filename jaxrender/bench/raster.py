@@ -7,8 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.bench.timing import time_compiled
-from jaxrender.raster.rasterize import (_rasterize_program, default_clip_capacity,
-                                        default_work_capacity)
+from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
+                                        rasterize_program)
 from jaxrender.raster.samples import CENTER, to_fixed
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.raster.test_meshes import terrain
@@ -44,7 +44,7 @@ def static_args(n_tris: int, width: int, height: int) -> dict:
 
 def time_raster(n_tris: int, width: int, height: int, repeats: int = 10) -> dict:
     clip, faces = terrain_clip(n_tris, width, height)
-    r = time_compiled(_rasterize_program, clip, faces, repeats=repeats,
+    r = time_compiled(rasterize_program, clip, faces, repeats=repeats,
                       **static_args(faces.shape[0], width, height))
     vis = r.pop("out")
     mtri = faces.shape[0] / (r["median_ms"] * 1e3)

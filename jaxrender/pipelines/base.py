@@ -18,8 +18,8 @@ from jaxrender.pipelines.dispatch import DEFAULT_CHUNK, dispatch, shade_pixels
 from jaxrender.pipelines.registry import RenderConfig
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.raster.fragments import Fragments, fragments_jit
-from jaxrender.raster.rasterize import (_rasterize, default_clip_capacity,
-                                        default_work_capacity)
+from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
+                                        rasterize_traced)
 from jaxrender.raster.resolve import barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.camera import Camera, world_to_clip
@@ -116,7 +116,7 @@ def raster_visbuffer(clip: Array, faces: Array, cfg, *, cull_backfaces: bool = F
     """``raster.rasterize_clip`` for a traced scene: (H, W), or (S, H, W) for S > 1 offsets."""
     offsets = sample_patterns.validate(sample_offsets or sample_patterns.CENTER)
     n_tris = faces.shape[0]
-    return _rasterize(
+    return rasterize_traced(
         clip, faces, width=cfg.width, height=cfg.height, cull_backfaces=bool(cull_backfaces),
         offsets=sample_patterns.to_fixed(offsets, SUBPIXEL_BITS),
         work_capacity=default_work_capacity(n_tris, cfg.width, cfg.height),

@@ -12,7 +12,7 @@ reconstructed and is shaded as well (counted).
 Reconstruction of a missing pixel, geometry-aware from a full-resolution visibility pass:
 
 - temporal (``temporal = true``, frames t >= 1 of a sequence): the pixel is reprojected into
-  frame t-1 through the known camera motion (``metrics.reproject``) and, of the 2x2 pixels
+  frame t-1 through the known camera motion (``scene.reprojection.reproject``) and, of the 2x2 pixels
   around that point, the nearest one shaded in frame t-1 with the same surface id is taken,
   unless the point is off screen or its depth disagrees (disocclusion); then
 - spatial: the mean of the 4 neighbours (all shaded this frame) that show the same surface id;
@@ -33,7 +33,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxrender.metrics.temporal import DEFAULT_DEPTH_TOLERANCE, reproject
+from jaxrender.scene.reprojection import DEFAULT_DEPTH_TOLERANCE, reproject
 from jaxrender.pipelines.base import (
     PipelineConfig,
     make_counts,

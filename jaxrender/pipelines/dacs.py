@@ -32,7 +32,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.pipelines import dacs_warp
+import jaxrender.pipelines.dacs_warp as dacs_warp
 from jaxrender.pipelines.base import (
     PipelineConfig,
     make_counts,

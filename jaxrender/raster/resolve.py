@@ -13,7 +13,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.raster.coverage import EMPTY_KEY
+from jaxrender.raster.work_items import EMPTY_KEY
 from jaxrender.types import Array, VisBuffer
 
 

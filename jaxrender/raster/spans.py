@@ -20,7 +20,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.raster.coverage import WorkChunk, owners, window_depth
+from jaxrender.raster.work_items import WorkChunk, owners, window_depth
 from jaxrender.raster.setup import SUBPIXEL, TriSetup
 from jaxrender.types import Array
 

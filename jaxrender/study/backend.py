@@ -97,7 +97,7 @@ def scene_params(name: str) -> dict | None:
 
 def load_scene(source: str, params: dict) -> Any:
     """``source`` is a built-in name or a path to a scene TOML file."""
-    fn = _attr("jaxrender.scene", "load_scene", "loading a scene")
+    fn = _attr("jaxrender.shading", "load_lit_scene", "loading a scene")
     try:
         return fn(source, **params)
     except (FileNotFoundError, TypeError) as e:

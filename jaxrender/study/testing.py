@@ -125,7 +125,6 @@ def install(monkeypatch, *, metrics: bool = True):
     import jaxrender.metrics
     from jaxrender.study import backend
 
-    registry._load_builtin_pipelines()
     monkeypatch.setitem(registry.REGISTRY, "flat",
                         registry.Pipeline("flat", FlatConfig, registry.FrameStep(render_flat),
                                           description="fake: quantised"))

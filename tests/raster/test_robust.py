@@ -179,10 +179,10 @@ def test_fragment_overflow_is_an_error_naming_the_capacity():
 
 
 def test_moving_the_camera_does_not_recompile():
-    from jaxrender.raster.rasterize import _rasterize, _rasterize_program
+    from jaxrender.raster.rasterize import rasterize_program, rasterize_traced
 
     def compiled():
-        return _rasterize._cache_size() + _rasterize_program._cache_size()
+        return rasterize_traced._cache_size() + rasterize_program._cache_size()
 
     v, f = pad(*uv_sphere(8, 12))
     jax.block_until_ready(rasterize(v, f, look_at((0, 0.2, 3.0), (0, 0, 0), fov_y_deg=40,

@@ -8,7 +8,7 @@ import pytest
 
 from jaxrender.raster import samples
 from jaxrender.raster.fragments import fragments_jit
-from jaxrender.raster.rasterize import _rasterize
+from jaxrender.raster.rasterize import rasterize_traced
 from jaxrender.raster.samples import to_fixed
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from tests.raster.conftest import gl_clip, pad
@@ -18,7 +18,7 @@ FIELDS = ("tri_id", "depth", "bary", "dbary_dx", "dbary_dy")
 
 
 def _vis(clip, faces, traversal, *, cull=False, offsets=samples.CENTER, work=1 << 16, clip_cap=64):
-    return _rasterize(
+    return rasterize_traced(
         jnp.asarray(clip), jnp.asarray(faces), width=W, height=H, cull_backfaces=cull,
         offsets=to_fixed(offsets, SUBPIXEL_BITS), work_capacity=work, clip_capacity=clip_cap,
         traversal=traversal,
@@ -81,7 +81,8 @@ def test_peeled_first_chunk_changes_nothing(rng, traversal):
     # order, must run, whether the items fill many chunks, one, or none at all.
     import jax
 
-    from jaxrender.raster.coverage import Triangles, depth_key, for_each_chunk
+    from jaxrender.raster.coverage import for_each_chunk
+    from jaxrender.raster.work_items import Triangles, depth_key
     from jaxrender.raster.setup import SetupFn
 
     clip, faces = _random_scene(rng, "mixed_sizes")
