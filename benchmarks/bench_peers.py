@@ -49,7 +49,7 @@ from jaxrender.bench.timing import dump, environment, print_table, time_compiled
 from jaxrender.raster import rasterize_clip, rasterize_depth_clip
 from jaxrender.raster.rasterize import rasterize_donating, rasterize_program
 from jaxrender.raster.setup import SUBPIXEL_BITS
-from jaxrender.raster.test_meshes import terrain
+from jaxrender.scene.mesh import terrain_mesh
 
 JR_CASES = [(1920, 1080, 2_500), (640, 360, 10_000)]
 GL_CASES = [(1920, 1080, 2_500), (1920, 1080, 164_000), (1920, 1080, 655_000),
@@ -440,7 +440,7 @@ def main(argv=None) -> int:
         ours = None if vis is None else np.asarray(vis.tri_id)
         if not jr_reason and (width, height, n) in jr_cases:
             try:
-                v, f = terrain(n)
+                v, f = terrain_mesh(n)
                 with warnings.catch_warnings():  # jaxtyping warns at every trace
                     warnings.simplefilter("ignore")
                     t, z = jaxrenderer_depth(v, f, width, height, max(2, a.repeats // 2))

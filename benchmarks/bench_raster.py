@@ -30,8 +30,8 @@ from jaxrender.raster.rasterize import (  # noqa: E402
 )
 from jaxrender.raster.samples import CENTER, to_fixed  # noqa: E402
 from jaxrender.raster.setup import SUBPIXEL_BITS, setup_triangles  # noqa: E402
-from jaxrender.raster.test_meshes import terrain  # noqa: E402
 from jaxrender.scene.camera import look_at, world_to_clip  # noqa: E402
+from jaxrender.scene.mesh import terrain_mesh  # noqa: E402
 
 PRESETS = {
     "cpu": [(640, 360, 10_000)],
@@ -41,7 +41,7 @@ PRESETS = {
 
 
 def scene(n_tris: int, width: int, height: int):
-    v, f = terrain(n_tris)
+    v, f = terrain_mesh(n_tris)
     cam = look_at((0.0, 30.0, 62.0), (0.0, 0.0, -5.0), fov_y_deg=55, near=0.5, far=500)
     clip = world_to_clip(jnp.asarray(v), cam, width / height)
     return clip, jnp.asarray(f)

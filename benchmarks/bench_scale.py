@@ -22,8 +22,8 @@ from jaxrender.bench.raster import terrain_camera
 from jaxrender.bench.timing import dump, environment, print_table
 from jaxrender.bench.timing import time_first_call
 from jaxrender.raster import rasterize
-from jaxrender.raster.test_meshes import terrain
 from jaxrender.scene.camera_path import frame, orbit
+from jaxrender.scene.mesh import terrain_mesh
 
 
 def _time(call, repeats):
@@ -130,7 +130,7 @@ def main(argv=None) -> int:
         dump(a.json, {"environment": env, "devices": [str(d) for d in jax.devices()], "rows": rows})
 
     if a.raster_triangles:
-        v, f = terrain(a.raster_triangles)
+        v, f = terrain_mesh(a.raster_triangles)
         base = terrain_camera()
         # a small orbit of the benchmark camera: yaw the eye about the terrain's centre
         eye0 = np.asarray(base.eye, np.float64)

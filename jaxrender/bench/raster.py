@@ -11,8 +11,8 @@ from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capa
                                         rasterize_program)
 from jaxrender.raster.samples import CENTER, to_fixed
 from jaxrender.raster.setup import SUBPIXEL_BITS
-from jaxrender.raster.test_meshes import terrain
 from jaxrender.scene.camera import look_at, world_to_clip
+from jaxrender.scene.mesh import terrain_mesh
 
 # (triangles, width, height); the full sweeps follow issue 11, --quick is for a CPU.
 TRIANGLE_SWEEP = [(10_000, 1920, 1080), (40_000, 1920, 1080), (164_000, 1920, 1080),
@@ -30,7 +30,7 @@ def terrain_camera():
 def terrain_clip(n_tris: int, width: int, height: int):
     """(clip float32[V,4], faces int32[T,3]) of the benchmark terrain: identical to
     benchmarks/bench_raster.py's ``scene``, so every raster benchmark sees the same frame."""
-    v, f = terrain(n_tris)
+    v, f = terrain_mesh(n_tris)
     clip = world_to_clip(jnp.asarray(v), terrain_camera(), width / height)
     return clip, jnp.asarray(f)
 
