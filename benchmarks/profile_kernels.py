@@ -156,10 +156,11 @@ def main(argv=None) -> int:
         return 0
     from jaxrender.bench.pipelines import parse_spec
     from jaxrender.pipelines import get_pipeline, make_config
-    from jaxrender.scene import default_camera, load_scene
+    from jaxrender.scene import default_camera
+    from jaxrender.shading import load_lit_scene
 
     name, params = parse_spec(args.scene)
-    sc = load_scene(name, **params)
+    sc = load_lit_scene(name, **params)
     cam = default_camera(sc)
     pipe = get_pipeline(args.what)
     _, overrides = parse_spec(args.what + ":" + ",".join(args.set))  # TOML values

@@ -16,9 +16,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_raster import scene  # noqa: E402
 from common import environment, time_jitted  # noqa: E402
 
-from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key  # noqa: E402
 from jaxrender.raster.resolve import resolve  # noqa: E402
 from jaxrender.raster.setup import setup_triangles  # noqa: E402
+from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key  # noqa: E402
 
 
 def main(argv=None):

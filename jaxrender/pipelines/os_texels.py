@@ -48,8 +48,7 @@ def raster_st(st: np.ndarray, res: int, conservative: bool = False, window=None
     live = (area2 != 0) & (lo_x <= hi_x) & (lo_y <= hi_y)
     # Triangles in batches of similar bounding-box width and height, each batch on an
     # [n, SY, SX] grid of powers of two: a long sliver (xatlas charts of thin boxes) costs its
-    # box, not the square around it (measured 2026-11-23: the thin scene's sheet took 66 s
-    # with square grids).
+    # box, not the square around it (with square grids the thin scene's sheet took a minute).
     bits_x = _ceil_log2(hi_x - lo_x + 1)
     bits_y = _ceil_log2(hi_y - lo_y + 1)
     big = np.int64(np.iinfo(np.int64).max)
@@ -99,7 +98,7 @@ def _cover(k, xs, ys, area2, lo_x, lo_y, hi_x, hi_y, size_x, size_y, row, conser
     if pix.size == 0:
         return
     # Lowest triangle per texel, and the count, from one sort of (texel, triangle) keys:
-    # ufunc.at (a scatter with repeats) was the slowest step of a sheet build (2026-11-23).
+    # ufunc.at (a scatter with repeats) was the slowest step of a sheet build.
     stride = int(k.max(initial=0)) + 1
     key = np.sort(pix * stride + tri)
     texel = key // stride

@@ -27,7 +27,7 @@ from typing import ClassVar
 import jax
 import jax.numpy as jnp
 
-from jaxrender.pipelines.dispatch import shade_pixels
+import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines.registry import REGISTRY, RenderConfig, register_frame
 from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
                                         sample_visibility)
@@ -139,10 +139,11 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
             return surface_points(scene, camera, tri[items], bary[items], ddx[items], ddy[items])
 
         with jax.named_scope("shade"):
-            rgb, sc = shade_pixels(tri >= 0, points_of, lambda p: shade(p, scene),
-                                   jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
-        new = {"shade_invocations": sc["invocations"], "lanes": sc["lanes"],
-               "chunks": sc["chunks"], "fragments": rc["fragments"],
+            rgb, work = dispatch.shade(dispatch.WorkList.of(tri >= 0), points_of,
+                                       lambda p: shade(p, scene),
+                                       jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
+        new = {"shade_invocations": work.invocations, "lanes": work.lanes,
+               "chunks": work.chunks, "fragments": rc["fragments"],
                "work_items": rc["work_items"]}
         counts = {key: counts[key] + new[key] for key in counts}
         return acc + rgb, any_cov | (tri >= 0), counts
