@@ -6,9 +6,9 @@ capacity sets the chunk size (memory and compile shape), never what is kept.
 Triangles arrive by reference (``Triangles``: vertices, an index and a mask) with the function
 that sets them up; each traversal decides where the setup happens. The stored traversals set up
 every triangle once and gather the results per item; "recompute" (the GPU's) keeps only each
-triangle's item count and sets up again per item from its three vertices: on an H100 writing
-and gathering ~130 bytes of setup per triangle cost more than the arithmetic (2.6M triangles at
-1080p, 2026-11-23). Setup is a pure function of the vertices, so every traversal gets the same
+triangle's item count and sets up again per item from its three vertices: on a GPU writing
+and gathering ~130 bytes of setup per triangle costs more than the arithmetic when triangles
+are dense. Setup is a pure function of the vertices, so every traversal gets the same
 bits.
 """
 

@@ -31,23 +31,22 @@ def default_work_capacity(n_tris: int, width: int, height: int) -> int:
     """Chunk size of the pixel work list: two bounding-box pixels per screen pixel plus one
     for every other triangle, rounded up to 2^16. A static chunk costs its full size whatever
     it holds, so it should fit a typical frame's items without much slack; a frame that needs
-    more runs more chunks (measured 2026-11-22: a 1080p terrain needed 4.1-4.2M items for any
-    triangle count from 2.5k to 2.6M)."""
+    more runs more chunks (a 1080p terrain needs about two items per pixel whatever its
+    triangle count)."""
     want = 2 * width * height + n_tris // 2
     return int(min(max(1 << 16, -(-want // (1 << 16)) * (1 << 16)), 1 << 25))
 
 
 # Below this many pixels "auto" keeps the bounding-box traversal on the CPU: the span
-# traversal pays for itself in run time on large frames (640x360 terrain: 56 -> 21 ms) but
-# costs compile time (+1.3 s per rasterizing program on the 2-core CPU, measured 2026-11-22),
-# which dominates small frames (the quickstart at 128x72, the tests).
+# traversal pays for itself in run time on large frames but costs compile time (over a second
+# per rasterizing program on a 2-core CPU), which dominates small frames (the quickstart at
+# 128x72, the tests).
 SPANS_MIN_PIXELS = 1 << 16
 
 # Elsewhere (GPU) "auto" recomputes the setup per work item when there is at least one
-# triangle per this many pixels, and stores it otherwise. Kernel time per frame on an H100 at
-# 1920x1080 (2026-11-23), stored vs recomputed: 2.5k triangles 0.296 vs 0.351 ms, 164k 0.428 vs
-# 0.426, 655k 0.585 vs 0.507, 2.6M 1.370 vs 0.859: per item, recomputing costs more than
-# gathering when many items share a triangle, and saves the setup's writes when few do.
+# triangle per this many pixels, and stores it otherwise: per item, recomputing costs more than
+# gathering when many items share a triangle, and saves the setup's writes when few do (the
+# crossover lies between 164k and 655k triangles at 1920x1080).
 RECOMPUTE_MIN_DENSITY = 16
 
 
@@ -77,8 +76,8 @@ def rasterize_clip(
     ``donate``: the previous result of the same call (same kind and size), for a frame loop
     (``vis = rasterize_clip(..., donate=vis)``). This call's output takes over its device
     memory and it is deleted. On a GPU that keeps every buffer at the same address from frame
-    to frame, so XLA need not update its CUDA graphs before each launch: 0.25 -> 0.19 ms per
-    call at 640x360 on an H100 (2026-11-23).
+    to frame, so XLA need not update its CUDA graphs before each launch, which is a
+    noticeable part of a small frame's time.
     """
     return _rasterize_checked(clip, faces, width, height, True, cull_backfaces, sample_offsets,
                               work_capacity, clip_capacity, donate)
@@ -88,8 +87,8 @@ def rasterize_depth_clip(clip: Array, faces: Array, width: int, height: int,
                          **kwargs) -> DepthBuffer:
     """``rasterize_clip`` without barycentrics: the nearest triangle's id and depth per pixel
     (bit for bit those of the VisBuffer), for a depth pre-pass, a shadow map or an id buffer.
-    Skips the resolve step and two thirds of the output (at 1080p on an H100 the resolve's
-    kernels took 0.07 of 0.29 ms, 2026-11-23)."""
+    Skips the resolve step (about a quarter of a 1080p frame's kernel time on a GPU) and two
+    thirds of the output."""
     return _rasterize_checked(clip, faces, width, height, False, **kwargs)
 
 
@@ -192,8 +191,8 @@ rasterize_traced = jax.jit(_rasterize_impl, static_argnames=_STATIC)
 # A call on its own (the entry points with concrete arrays; the benchmarks) compiles with
 # XLA GPU's graph threshold at 1: a run of fewer than 5 kernels (its default) is launched
 # kernel by kernel, and the three after the coverage loop (decode, counts) then cost a launch
-# each. As one CUDA graph a donated 640x360 depth call took 0.183-0.219 ms instead of
-# 0.235-0.252 on an H100 (2026-11-23), with no change at larger sizes. Other backends ignore
+# each. As one CUDA graph a small donated depth call is about a fifth faster, with no change
+# at larger sizes. Other backends ignore
 # the option; jax accepts options on a top-level jit only, hence the separate entries.
 _OPTIONS = {"xla_gpu_graph_min_graph_size": 1}
 rasterize_program = jax.jit(_rasterize_impl, static_argnames=_STATIC, compiler_options=_OPTIONS)
@@ -297,8 +296,7 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
         "work_items": items,
         "clipped": n_cross,
         # Summed from a materialised copy of the mask: otherwise XLA GPU fuses this scalar sum
-        # with the triangle setup, which then runs inside the reduction's one thread block
-        # (28 us of a 0.1 ms frame at 640x360 on an H100, 2026-11-23).
+        # with the triangle setup, which then runs inside the reduction's one thread block.
         "dropped_nonfinite": jnp.sum(~jax.lax.optimization_barrier(finite), dtype=jnp.int64),
     }
     return state, counts
