@@ -3,9 +3,9 @@ pass shades every covered pixel once from the G-buffer.
 
 The G-buffer is real: the attribute pass writes the ``gbuffer.GBUFFER_LAYOUT`` channels of
 every covered pixel (sample) into full-screen float32 planes through the chunked dispatch, and
-the lighting pass reads them back and calls the shared ``shade``. The bytes written and read are the planes'
-bytes times the pixels (samples) that the two work lists touched. Under MSAA the G-buffer holds
-every sample; lighting shades one representative sample per pixel and, with
+the lighting pass reads them back and calls the shared ``shade``. The bytes written and read
+are the planes' bytes times the pixels (samples) that the two work lists touched. Under MSAA
+the G-buffer holds every sample; lighting shades one representative sample per pixel and, with
 ``per_sample_shading``, also every sample whose surface differs from it.
 """
 

@@ -29,8 +29,8 @@ def auto_chunk(capacity: int) -> int:
 
     Why not small: every iteration of the dispatch loop costs a fixed launch-and-sync overhead on
     a GPU, which for a full screen in 4096-lane chunks is several times the shading itself.
-    Why not the whole list: the last chunk's idle lanes are launched too (and counted in ``lanes``), so a pipeline
-    that shades little must not pay for a full screen."""
+    Why not the whole list: the last chunk's idle lanes are launched too (and counted in
+    ``lanes``), so a pipeline that shades little must not pay for a full screen."""
     want = max(int(capacity) // 8, 1)
     return int(min(max(1 << (want - 1).bit_length(), MIN_CHUNK), MAX_CHUNK))
 
@@ -45,9 +45,10 @@ class WorkList:
     """A compacted work list and, once dispatched, what was launched for it.
 
     items int32[N]: item indices (pixels, samples, fragments, shadels), the first ``count``
-    live; count int32[]: live items. After ``dispatch``: ``chunk`` (static lanes per chunk) and
-    ``invocations`` (lanes that wrote a result: ``count``, or fewer for lane lists whose lanes
-    are not one-to-one with outputs). ``chunks``, ``lanes`` and ``idle_lanes`` follow from them.
+    live; count int32[]: live items. After ``run`` (or ``shade``): ``chunk`` (static lanes per
+    chunk) and ``invocations`` (lanes that wrote a result: ``count``, or fewer for lane lists
+    whose lanes are not one-to-one with outputs). ``chunks``, ``lanes`` and ``idle_lanes``
+    follow from them.
     """
 
     items: Array

@@ -9,12 +9,12 @@ and the triangle that owns each shadel; colours live in the physical store (os_a
 The triangle-id map is rasterized in chart (s, t) space at every level with the shared
 rasterizer's rules (``os_texels.raster_st``: 8-bit snapping, exact integer edge functions,
 top-left rule; a NumPy loop because the map is built once per mesh on the host and the jitted
-rasterizer would compile once per level size; a test checks it against ``rasterize_clip``): first normally
-(texel centres), then conservatively (every texel whose square the triangle touches, into the
-texels still empty), then one ring of gutter dilation (so every bilinear tap next to a chart edge
-has an owner), and finally every triangle that still owns no shadel claims the texel under its
-chart centroid (when that texel's owner keeps another one). At level 0 every triangle then owns
-at least one shadel (a triangle of zero chart area included).
+rasterizer would compile once per level size; a test checks it against ``rasterize_clip``):
+first normally (texel centres), then conservatively (every texel whose square the triangle
+touches, into the texels still empty), then one ring of gutter dilation (so every bilinear tap
+next to a chart edge has an owner), and finally every triangle that still owns no shadel claims
+the texel under its chart centroid (when that texel's owner keeps another one). At level 0 every
+triangle then owns at least one shadel (a triangle of zero chart area included).
 """
 
 from __future__ import annotations

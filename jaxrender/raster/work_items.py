@@ -107,7 +107,8 @@ def window_depth(e: list, z: list, inv_area: Array) -> Array:
     return jnp.clip(depth, 0.0, 1.0)
 
 
-def chunk_items(setup: TriSetup, incl: Array, base: Array, capacity: int, offset: Array) -> WorkChunk:
+def chunk_items(setup: TriSetup, incl: Array, base: Array, capacity: int,
+                offset: Array) -> WorkChunk:
     """The work items [base, base + capacity) of the box traversal (``incl``: the inclusive
     cumsum of ``setup.count``), from setup stored per triangle."""
     slot, j, live = owners(setup.count, incl, base, capacity)

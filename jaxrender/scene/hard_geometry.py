@@ -33,7 +33,7 @@ def degenerate() -> Scene:
         else:
             tris.append([a, b, 0.3 * a + 0.7 * b + [0, 1e-7, 0]])  # 1e-7 off the line
     return case_scene("hard_degenerate", [backdrop(), triangle_soup(tris)], case_camera(),
-                  doc=degenerate.__doc__)
+                      doc=degenerate.__doc__)
 
 
 def sliver() -> Scene:
@@ -64,8 +64,9 @@ def sliver() -> Scene:
         p0, p1 = c - 1.5 * d, c + 1.5 * d
         p2 = c + 3e-6 * nrm  # height 3e-6 over a base of 3: aspect 1e6
         free.append([[*p0, 0.5], [*p1, 0.5], [*p2, 0.5]])
-    return case_scene("hard_sliver", [backdrop(), fan, triangle_soup(free, material=2)], case_camera(),
-                  doc=sliver.__doc__)
+    return case_scene("hard_sliver", [backdrop(), fan, triangle_soup(free, material=2)],
+                      case_camera(),
+                      doc=sliver.__doc__)
 
 
 def subpixel(*, n_triangles: int = 400) -> Scene:
@@ -80,7 +81,8 @@ def subpixel(*, n_triangles: int = 400) -> Scene:
     side = np.sqrt(2e-4) * px  # a right triangle of legs s has area s^2 / 2 = 1e-4 px^2
     c = np.concatenate([rng.uniform(-1.6, 1.6, (n_triangles, 2)), np.zeros((n_triangles, 1))], 1)
     tris = np.stack([c, c + [side, 0, 0], c + [0, side, 0]], 1)
-    return case_scene("hard_subpixel", [backdrop(), triangle_soup(tris)], case_camera(), doc=subpixel.__doc__)
+    return case_scene("hard_subpixel", [backdrop(), triangle_soup(tris)], case_camera(),
+                      doc=subpixel.__doc__)
 
 
 def near_plane() -> Scene:
@@ -97,7 +99,8 @@ def near_plane() -> Scene:
     tris = [[[-3, 0.5, 3], [3, 0.5, 3], [0, 0.5, -8]],  # a ceiling from behind to ahead
             [[-0.5, -0.3, 1], [0.5, -0.3, 1], [0, 0.4, -3]]]
     return case_scene("hard_near_plane", [floor, wall, triangle_soup(tris)],
-                  case_camera((0, 0, 0), (0, 0, -1), near=0.05, far=200), doc=near_plane.__doc__)
+                      case_camera((0, 0, 0), (0, 0, -1), near=0.05, far=200),
+                      doc=near_plane.__doc__)
 
 
 def w_near_zero() -> Scene:
@@ -112,7 +115,8 @@ def w_near_zero() -> Scene:
             [[-0.5, -0.6, 1e-7], [0.5, -0.6, -1e-7], [0.0, -0.2, -1.5]],
             [[0.3, 0.3, -1e-4], [0.8, 0.3, -1.00001e-4], [0.5, 0.9, -1e-4]]]  # on the near plane
     return case_scene("hard_w_near_zero", [backdrop(z=-4), triangle_soup(tris)],
-                  case_camera((0, 0, 0), (0, 0, -1), near=1e-4, far=50), doc=w_near_zero.__doc__)
+                      case_camera((0, 0, 0), (0, 0, -1), near=1e-4, far=50),
+                      doc=w_near_zero.__doc__)
 
 
 def _far(offset: float, scale: float, name: str, doc: str) -> Scene:
@@ -167,8 +171,8 @@ def fov_1() -> Scene:
     Stresses: f = 1/tan(fov/2) = 115, tiny pixel footprints (huge barycentric derivatives per
     world unit reversed: duv tiny, texture magnified). Must hold: finite, error in bound."""
     return case_scene("hard_fov_1", [backdrop(), sphere()],
-                  case_camera((0, 0, 100.0), (0, 0, 0), fov_y_deg=1.0, near=1.0, far=300.0),
-                  doc=fov_1.__doc__)
+                      case_camera((0, 0, 100.0), (0, 0, 0), fov_y_deg=1.0, near=1.0, far=300.0),
+                      doc=fov_1.__doc__)
 
 
 def fov_170() -> Scene:
@@ -177,8 +181,8 @@ def fov_170() -> Scene:
     Stresses: f = 0.087, strong perspective at the image border, large guard-band coordinates.
     Must hold: finite, error in bound."""
     return case_scene("hard_fov_170", [backdrop(z=-1.0, size=80.0, uv_scale=(40, 40)), sphere()],
-                  case_camera((0, 0, 1.2), (0, 0, 0), fov_y_deg=170.0, near=0.01, far=100.0),
-                  doc=fov_170.__doc__)
+                      case_camera((0, 0, 1.2), (0, 0, 0), fov_y_deg=170.0, near=0.01, far=100.0),
+                      doc=fov_170.__doc__)
 
 
 def grazing() -> Scene:
@@ -189,6 +193,7 @@ def grazing() -> Scene:
     floor = grid_plane((400, 400), (4, 4), uv_scale=(400, 400), material=0)
     shiny = grid_plane((400, 400), (1, 1), material=1).transformed(trs_matrix((0, 0, -400)))
     return case_scene("hard_grazing", [floor, shiny],
-                  case_camera((0, 1e-3, 0), (0, 1e-3, -10), near=1e-4, far=1000.0),
-                  lights=case_lights(point=((0.0, 0.5, -30.0), 300.0), sun=((0.0, 0.02, -1.0), 2.0)),
-                  doc=grazing.__doc__)
+                      case_camera((0, 1e-3, 0), (0, 1e-3, -10), near=1e-4, far=1000.0),
+                      lights=case_lights(point=((0.0, 0.5, -30.0), 300.0),
+                                         sun=((0.0, 0.02, -1.0), 2.0)),
+                      doc=grazing.__doc__)

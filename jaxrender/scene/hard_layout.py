@@ -88,9 +88,10 @@ SCENE_DESCRIPTION = "a hard case of jaxrender.scene.hard_cases"
 
 
 def case_scene(name: str, parts: list[MeshPart], camera, *, lights=None, doc: str = "",
-           materials=MATERIALS) -> Scene:
+               materials=MATERIALS) -> Scene:
     del name, doc  # see SCENE_NAME
-    return build_scene(pad_to_layout(parts), list(materials), case_textures(), lights or case_lights(), camera,
+    return build_scene(pad_to_layout(parts), list(materials), case_textures(),
+                       lights or case_lights(), camera,
                        name=SCENE_NAME, description=SCENE_DESCRIPTION, effects=EFFECTS,
                        texture_resolution=TEXTURE_RES)
 

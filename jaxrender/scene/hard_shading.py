@@ -16,8 +16,8 @@ from jaxrender.scene.scene import Scene
 def _phong(exponent: float, name: str, doc: str) -> Scene:
     mat = dataclasses.replace(OBJECT, shininess=float(exponent))
     return case_scene(name, [backdrop(), sphere(0.9, lat=16, lon=24)], case_camera(),
-                  lights=case_lights(point=((0.0, 0.0, 2.5), 8.0)), doc=doc,
-                  materials=(BACKDROP, mat, SECOND, NOISE))
+                      lights=case_lights(point=((0.0, 0.0, 2.5), 8.0)), doc=doc,
+                      materials=(BACKDROP, mat, SECOND, NOISE))
 
 
 def phong_1e4() -> Scene:
@@ -70,8 +70,8 @@ def minify() -> Scene:
     Must hold: finite, colours tend to the texture mean, error in bound."""
     floor = grid_plane((1000, 1000), (4, 4), uv_scale=(1e4, 1e4), material=3)
     return case_scene("hard_minify", [floor],
-                  case_camera((0, 1.0, 0), (0, 0.0, -8), near=0.05, far=2000.0),
-                  doc=minify.__doc__)
+                      case_camera((0, 1.0, 0), (0, 0.0, -8), near=0.05, far=2000.0),
+                      doc=minify.__doc__)
 
 
 def magnify() -> Scene:
@@ -80,8 +80,9 @@ def magnify() -> Scene:
 
     Must hold: finite, the magnification filter clamps at level 0, error in bound."""
     wall = backdrop(z=-1e-3, size=0.1, uv_scale=(1e-4, 1e-4))
-    return case_scene("hard_magnify", [wall], case_camera((0, 0, 0), (0, 0, -1), near=1e-4, far=1.0),
-                  doc=magnify.__doc__)
+    return case_scene("hard_magnify", [wall],
+                      case_camera((0, 0, 0), (0, 0, -1), near=1e-4, far=1.0),
+                      doc=magnify.__doc__)
 
 
 def flat() -> Scene:
@@ -91,9 +92,9 @@ def flat() -> Scene:
     Must hold: every pipeline's image is that constant (within float rounding), so error 0."""
     wall = backdrop(material=2)
     return case_scene("hard_flat", [wall], case_camera(),
-                  lights=case_lights(point=((0, 0, 2.5), 0.0), sun=((0.0, 0.0, 1.0), 1.5),
-                                 ambient=0.0),
-                  doc=flat.__doc__)
+                      lights=case_lights(point=((0, 0, 2.5), 0.0), sun=((0.0, 0.0, 1.0), 1.5),
+                                     ambient=0.0),
+                      doc=flat.__doc__)
 
 
 def noise() -> Scene:
@@ -112,7 +113,7 @@ def empty() -> Scene:
     Stresses: empty work lists (zero chunks), empty coverage, metrics of an all-background
     image. Must hold: the image is background (0) and shading counts are 0."""
     return case_scene("hard_empty", [backdrop(z=5.0), sphere(centre=(0, 0, 4.0))], case_camera(),
-                  doc=empty.__doc__)
+                      doc=empty.__doc__)
 
 
 def tiny_image() -> Scene:
@@ -121,4 +122,5 @@ def tiny_image() -> Scene:
 
     Stresses: pixel blocks (quads, 4x4 DACS blocks, 8x8 chunks) cut by the image border, an
     aspect of 1/16 and of 4096. Must hold: finite, error in bound."""
-    return case_scene("hard_tiny_image", [backdrop(), sphere()], case_camera(), doc=tiny_image.__doc__)
+    return case_scene("hard_tiny_image", [backdrop(), sphere()], case_camera(),
+                      doc=tiny_image.__doc__)
