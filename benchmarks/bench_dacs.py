@@ -27,8 +27,8 @@ import numpy as np
 from jaxrender.metrics import image_metrics
 from jaxrender.timing import device_description, time_call
 from jaxrender.pipelines import checkerboard, dacs, deferred, get_pipeline, make_config
-from jaxrender.scene import load_scene
 from jaxrender.scene.camera_path import pan
+from jaxrender.shading import load_lit_scene
 
 METRICS = ("rmse", "psnr", "mssim", "flip")
 SWEEP = (0.0, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, float("inf"))
@@ -52,7 +52,7 @@ def quality(images, refs):
 class Scene:
     def __init__(self, name, w, h, frames, k, repeats, chunk, against):
         self.name, self.w, self.h, self.repeats, self.chunk = name, w, h, repeats, chunk
-        self.scene = load_scene(name)
+        self.scene = load_lit_scene(name)
         self.path = pan(self.scene.camera, frames, 1.0, h)
         self.cams = [c for c, _ in self.path]
         if against == "reference":

@@ -48,9 +48,9 @@ from jaxrender.bench.raster import static_args, terrain_camera, terrain_clip
 from jaxrender.bench.report import dump, print_table
 from jaxrender.timing import environment, time_compiled
 from jaxrender.raster import rasterize_clip, rasterize_depth_clip
-from jaxrender.raster.rasterize import _rasterize_donating, _rasterize_program
+from jaxrender.raster.rasterize import rasterize_donating, rasterize_program
 from jaxrender.raster.setup import SUBPIXEL_BITS
-from jaxrender.raster.test_meshes import terrain
+from jaxrender.scene.mesh import terrain_mesh
 
 JR_CASES = [(1920, 1080, 2_500), (640, 360, 10_000)]
 GL_CASES = [(1920, 1080, 2_500), (1920, 1080, 164_000), (1920, 1080, 655_000),
@@ -94,7 +94,7 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
     static = static_args(faces.shape[0], width, height)
     for suffix, bary, entry in (("", True, rasterize_clip), ("_depth", False, rasterize_depth_clip)):
         t0 = time.perf_counter()
-        compiled = _rasterize_program.lower(clip, faces, barycentrics=bary, **static).compile()
+        compiled = rasterize_program.lower(clip, faces, barycentrics=bary, **static).compile()
         out[f"jaxrender{suffix}_compile_s"] = time.perf_counter() - t0
         per = []
         for _ in range(max(3, repeats // 20)):
@@ -107,7 +107,7 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
         out[f"jaxrender{suffix}_batched_ms"] = 1e3 * statistics.median(per)
         first = compiled(clip, faces)
         steps[f"jaxrender{suffix}_ms"] = lambda _, c=compiled: c(clip, faces)
-        steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, b=bary, f=first: _rasterize_donating(
+        steps[f"jaxrender{suffix}_loop_ms"] = lambda prev, b=bary, f=first: rasterize_donating(
             clip, faces, f if prev is None else prev, barycentrics=b, **static)
         steps[f"jaxrender{suffix}_public_loop_ms"] = lambda prev, e=entry: e(
             clip, faces, width, height, donate=prev)
@@ -441,7 +441,7 @@ def main(argv=None) -> int:
         ours = None if vis is None else np.asarray(vis.tri_id)
         if not jr_reason and (width, height, n) in jr_cases:
             try:
-                v, f = terrain(n)
+                v, f = terrain_mesh(n)
                 with warnings.catch_warnings():  # jaxtyping warns at every trace
                     warnings.simplefilter("ignore")
                     t, z = jaxrenderer_depth(v, f, width, height, max(2, a.repeats // 2))

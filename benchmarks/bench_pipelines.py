@@ -13,7 +13,7 @@ import argparse
 
 from jaxrender.bench.pipelines import parse_spec as parse_variant
 from jaxrender.pipelines import get_pipeline, make_config, program
-from jaxrender.scene import load_scene
+from jaxrender.shading import load_lit_scene
 from jaxrender.timing import environment, time_call
 
 DEFAULT_VARIANTS = ("forward", "forward:z_prepass=true", "deferred", "visbuffer",
@@ -35,7 +35,7 @@ def main(argv=None) -> None:
           "overshading | waves | lane util | bytes |")
     print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for scene_name in a.scenes:
-        scene = load_scene(scene_name)
+        scene = load_lit_scene(scene_name)
         for variant in a.variants:
             name, params = parse_variant(variant)
             cfg = make_config(name, width=a.width, height=a.height, **params)

@@ -25,14 +25,14 @@ from jaxrender.timing import environment, time_compiled  # noqa: E402
 
 from jaxrender.raster import rasterize_clip  # noqa: E402
 from jaxrender.raster.rasterize import (  # noqa: E402
-    _rasterize_program,
     default_clip_capacity,
     default_work_capacity,
+    rasterize_program,
 )
 from jaxrender.raster.samples import CENTER, to_fixed  # noqa: E402
 from jaxrender.raster.setup import SUBPIXEL_BITS, setup_triangles  # noqa: E402
-from jaxrender.raster.test_meshes import terrain  # noqa: E402
 from jaxrender.scene.camera import look_at, world_to_clip  # noqa: E402
+from jaxrender.scene.mesh import terrain_mesh  # noqa: E402
 
 PRESETS = {
     "cpu": [(640, 360, 10_000)],
@@ -42,7 +42,7 @@ PRESETS = {
 
 
 def scene(n_tris: int, width: int, height: int):
-    v, f = terrain(n_tris)
+    v, f = terrain_mesh(n_tris)
     cam = look_at((0.0, 30.0, 62.0), (0.0, 0.0, -5.0), fov_y_deg=55, near=0.5, far=500)
     clip = world_to_clip(jnp.asarray(v), cam, width / height)
     return clip, jnp.asarray(f)
@@ -111,7 +111,7 @@ def main(argv=None) -> int:
     for width, height, n in PRESETS[args.preset]:
         clip, faces = scene(n, width, height)
         st = static_args(faces.shape[0], width, height)
-        r = time_compiled(_rasterize_program, clip, faces, repeats=args.repeats, **st)
+        r = time_compiled(rasterize_program, clip, faces, repeats=args.repeats, **st)
         vis = r.pop("out")
         row = dict(resolution=f"{width}x{height}", triangles=int(faces.shape[0]), **r,
                    fragments=int(vis.counts["fragments"]), work_items=int(vis.counts["work_items"]),
@@ -133,7 +133,7 @@ def main(argv=None) -> int:
         ids = r.pop("out")
         times = [r["median_ms"] / 1e3]
         st = static_args(faces.shape[0], bw, bh)
-        r = time_compiled(_rasterize_program, clip, faces, repeats=args.repeats, **st)
+        r = time_compiled(rasterize_program, clip, faces, repeats=args.repeats, **st)
         vis = r.pop("out")
         agree = float(np.mean(np.asarray(ids) == np.asarray(vis.tri_id)))
         rows.append(dict(resolution=f"{bw}x{bh}", triangles=int(faces.shape[0]),

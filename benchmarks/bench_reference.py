@@ -18,7 +18,8 @@ import jax
 
 from jaxrender.pipelines import get_pipeline, program
 from jaxrender.pipelines.reference import ReferenceConfig, ldr_psnr
-from jaxrender.scene import default_camera, list_builtin_scenes, load_scene
+from jaxrender.scene import default_camera, list_builtin_scenes
+from jaxrender.shading import load_lit_scene
 from jaxrender.timing import environment, time_call
 
 
@@ -29,7 +30,7 @@ def bench(scenes, width, height, ks, repeats) -> None:
     print("|---|---|---|---|---|---|---|---|")
     pipe = get_pipeline("reference")
     for name in scenes:
-        scene = load_scene(name)
+        scene = load_lit_scene(name)
         cam = default_camera(scene)
         base = ReferenceConfig(width=width, height=height, k=ks[0])
         _, compile_ms = program.compile(pipe, scene, cam, base)
@@ -50,7 +51,7 @@ def convergence(scenes, width, height, ks) -> None:
     print("|---|---|---|---|---|")
     pipe = get_pipeline("reference")
     for name in scenes:
-        scene = load_scene(name)
+        scene = load_lit_scene(name)
         cam = default_camera(scene)
         base = ReferenceConfig(width=width, height=height)
         images = {}

@@ -22,8 +22,8 @@ from jaxrender.bench.raster import terrain_camera
 from jaxrender.bench.report import dump, print_table
 from jaxrender.timing import environment, time_first_call
 from jaxrender.raster import rasterize
-from jaxrender.raster.test_meshes import terrain
 from jaxrender.scene.camera_path import frame, orbit
+from jaxrender.scene.mesh import terrain_mesh
 
 
 def _time(call, repeats):
@@ -130,7 +130,7 @@ def main(argv=None) -> int:
         dump(a.json, {"environment": env, "devices": [str(d) for d in jax.devices()], "rows": rows})
 
     if a.raster_triangles:
-        v, f = terrain(a.raster_triangles)
+        v, f = terrain_mesh(a.raster_triangles)
         base = terrain_camera()
         # a small orbit of the benchmark camera: yaw the eye about the terrain's centre
         eye0 = np.asarray(base.eye, np.float64)
@@ -141,9 +141,10 @@ def main(argv=None) -> int:
                         a.frames, a.repeats, a.chunk, lambda x: x))
     if a.pipelines:
         from jaxrender.pipelines import get_pipeline, make_config
-        from jaxrender.scene import default_camera, load_scene
+        from jaxrender.scene import default_camera
+        from jaxrender.shading import load_lit_scene
 
-        scene = load_scene(a.scene)
+        scene = load_lit_scene(a.scene)
         cam = default_camera(scene)
         pos = np.asarray(scene.positions, np.float64)
         c = 0.5 * (pos.min(0) + pos.max(0))  # orbit the scene's bounding-box centre

@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from jaxrender.bench.report import print_table  # noqa: E402
 from jaxrender.timing import environment, time_call  # noqa: E402
 from jaxrender.pipelines import list_pipelines, make_config, program  # noqa: E402
-from jaxrender.scene import load_scene  # noqa: E402
 from jaxrender.scene.camera_path import pan  # noqa: E402
+from jaxrender.shading import load_lit_scene  # noqa: E402
 from jaxrender.study.specs import parse_resolution  # noqa: E402
 
 
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     jobs = {}
     with ThreadPoolExecutor(max_workers=4) as pool:
         for sname in a.scenes:
-            scene = load_scene(sname)
+            scene = load_lit_scene(sname)
             cams = pan(scene.camera, a.frames, a.pixels_per_frame, h).cameras
             path = cams  # batched: stacked once, outside the timed calls
             for name in names:

@@ -148,20 +148,21 @@ def main(argv=None) -> int:
     if args.what == "raster":
         from bench_raster import scene, static_args
 
-        from jaxrender.raster.rasterize import _rasterize
+        from jaxrender.raster.rasterize import rasterize_traced
 
         clip, faces = scene(args.triangles, w, h)
-        fn = jax.jit(lambda c, f: _rasterize(c, f, **static_args(faces.shape[0], w, h),
+        fn = jax.jit(lambda c, f: rasterize_traced(c, f, **static_args(faces.shape[0], w, h),
                                              traversal=args.traversal))
         profile_call(fn, clip, faces, calls=args.calls, top=args.top,
                      label=f"raster {w}x{h} {faces.shape[0]} triangles ({args.traversal})")
         return 0
     from jaxrender.bench.pipelines import parse_spec
     from jaxrender.pipelines import get_pipeline, make_config
-    from jaxrender.scene import default_camera, load_scene
+    from jaxrender.scene import default_camera
+    from jaxrender.shading import load_lit_scene
 
     name, params = parse_spec(args.scene)
-    sc = load_scene(name, **params)
+    sc = load_lit_scene(name, **params)
     cam = default_camera(sc)
     pipe = get_pipeline(args.what)
     _, overrides = parse_spec(args.what + ":" + ",".join(args.set))  # TOML values

@@ -16,9 +16,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_raster import scene  # noqa: E402
 from jaxrender.timing import environment, time_compiled  # noqa: E402
 
-from jaxrender.raster.coverage import EMPTY_KEY, _chunk, depth_key  # noqa: E402
 from jaxrender.raster.resolve import resolve  # noqa: E402
 from jaxrender.raster.setup import setup_triangles  # noqa: E402
+from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key  # noqa: E402
 
 
 def main(argv=None):
@@ -44,7 +44,7 @@ def main(argv=None):
         t("gather clip[faces]", lambda c, f: c[f], clip, faces)
         s = t("setup", lambda c, f: setup_triangles(c[f], ones, ids, w, h, off, False), clip, faces)
         incl = t("cumsum counts", lambda s: jnp.cumsum(s.count), s)
-        t("owner: scatter marks + assoc scan", lambda s, i: _chunk(s, i, jnp.int64(0), cap, off).slot, s, incl)
+        t("owner: scatter marks + assoc scan", lambda s, i: chunk_items(s, i, jnp.int64(0), cap, off).slot, s, incl)
 
         def cummax_owner(s, incl):
             starts = incl - s.count
@@ -53,7 +53,7 @@ def main(argv=None):
 
         t("owner: scatter marks + lax.cummax", cummax_owner, s, incl)
         t("owner: searchsorted scan", lambda i: jnp.searchsorted(i, jnp.arange(cap, dtype=jnp.int64), side="right"), incl)
-        ch = t("chunk (all outputs)", lambda s, i: _chunk(s, i, jnp.int64(0), cap, off), s, incl)
+        ch = t("chunk (all outputs)", lambda s, i: chunk_items(s, i, jnp.int64(0), cap, off), s, incl)
 
         def scat(ch):
             pix = jnp.where(ch.covered, ch.py * w + ch.px, w * h)

@@ -32,7 +32,7 @@ def static_field(**kwargs):
 
 class Counts(Mapping):
     """Named integer scalars held as one array: a compiled program hands each output buffer
-    back separately (about 4 us each on an H100, 2026-11-23), so a rasterizer called on its own
+    back separately (microseconds each on a GPU), so a rasterizer called on its own
     returns its counts as one buffer. Reads like a dict (``counts["fragments"]``, ``dict(counts)``);
     outside a program each read is a small slice of the device array."""
 

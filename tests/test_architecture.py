@@ -18,12 +18,13 @@ PACKAGE = Path(__file__).resolve().parents[1] / "jaxrender"
 # of lower rank. Plain helpers that know nothing of rendering sit at the bottom.
 LAYERS = {
     "types": 0, "compaction": 0, "sorting": 0, "spawning": 0, "parallel": 0, "version": 0,
-    "timing": 0,
+    "errors": 0, "catalog": 0,
     "scene": 1,
     "raster": 2,
     "shading": 3,
     "pipelines": 4,
     "metrics": 5,
+    "timing": 5.5,  # times compiled pipeline programs
     "study": 6,
     "figures": 7, "bench": 7,
     "cli": 8,

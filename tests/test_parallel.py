@@ -14,7 +14,7 @@ import pytest
 
 from jaxrender import parallel
 from jaxrender.raster import rasterize
-from jaxrender.raster.test_meshes import uv_sphere
+from jaxrender.scene.mesh import closed_uv_sphere
 from jaxrender.scene.camera_path import frame, orbit
 
 W, H = 24, 16
@@ -22,7 +22,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _scene():
-    v, f = uv_sphere(6, 10)
+    v, f = closed_uv_sphere(6, 10)
     return jnp.asarray(v), jnp.asarray(f)
 
 

@@ -52,7 +52,8 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
                    deadline: float | None = None, log=print):
     """Yield one row per (scene, pipeline); rows past ``deadline`` (time.monotonic) are skipped."""
     from jaxrender.pipelines import get_pipeline, make_config
-    from jaxrender.scene import default_camera, load_scene
+    from jaxrender.scene import default_camera
+    from jaxrender.shading import load_lit_scene
     from jaxrender.timing import compile_program
 
     for scene_spec in scene_specs:
@@ -63,7 +64,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
         try:
             name, params = parse_spec(scene_spec)
             t0 = time.perf_counter()
-            scene = load_scene(name, **params)
+            scene = load_lit_scene(name, **params)
             camera = default_camera(scene)
             base["load_s"] = time.perf_counter() - t0
             base["scene_triangles"] = int(scene.faces.shape[0]) if hasattr(scene, "faces") else None

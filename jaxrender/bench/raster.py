@@ -7,12 +7,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.timing import time_compiled
-from jaxrender.raster.rasterize import (_rasterize_program, default_clip_capacity,
-                                        default_work_capacity)
+from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
+                                        rasterize_program)
 from jaxrender.raster.samples import CENTER, to_fixed
 from jaxrender.raster.setup import SUBPIXEL_BITS
-from jaxrender.raster.test_meshes import terrain
 from jaxrender.scene.camera import look_at, world_to_clip
+from jaxrender.scene.mesh import terrain_mesh
 
 # (triangles, width, height); the full sweeps are the GPU targets of benchmarks/RESULTS.md,
 # --quick is for a CPU.
@@ -31,7 +31,7 @@ def terrain_camera():
 def terrain_clip(n_tris: int, width: int, height: int):
     """(clip float32[V,4], faces int32[T,3]) of the benchmark terrain: identical to
     benchmarks/bench_raster.py's ``scene``, so every raster benchmark sees the same frame."""
-    v, f = terrain(n_tris)
+    v, f = terrain_mesh(n_tris)
     clip = world_to_clip(jnp.asarray(v), terrain_camera(), width / height)
     return clip, jnp.asarray(f)
 
@@ -45,7 +45,7 @@ def static_args(n_tris: int, width: int, height: int) -> dict:
 
 def time_raster(n_tris: int, width: int, height: int, repeats: int = 10) -> dict:
     clip, faces = terrain_clip(n_tris, width, height)
-    r = time_compiled(_rasterize_program, clip, faces, repeats=repeats,
+    r = time_compiled(rasterize_program, clip, faces, repeats=repeats,
                       **static_args(faces.shape[0], width, height))
     vis = r.pop("out")
     mtri = faces.shape[0] / (r["median_ms"] * 1e3)

@@ -12,8 +12,8 @@ reconstructed and is shaded as well (counted).
 Reconstruction of a missing pixel, geometry-aware from a full-resolution visibility pass:
 
 - temporal (``temporal = true``, frames t >= 1 of a sequence): the pixel is reprojected into
-  frame t-1 through the known camera motion (``metrics.reproject``) and, of the 2x2 pixels
-  around that point, the nearest one shaded in frame t-1 with the same surface id is taken,
+  frame t-1 through the known camera motion (``scene.reprojection.reproject``) and, of the 2x2
+  pixels around that point, the nearest one shaded in frame t-1 with the same surface id is taken,
   unless the point is off screen or its depth disagrees (disocclusion); then
 - spatial: the mean of the 4 neighbours (all shaded this frame) that show the same surface id;
   when none does, the neighbour nearest in depth.
@@ -33,16 +33,9 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxrender.metrics.temporal import DEFAULT_DEPTH_TOLERANCE, reproject
-from jaxrender.pipelines.base import (
-    PipelineConfig,
-    make_counts,
-    points_from_vis,
-    poison_on_overflow,
-    visibility,
-)
-from jaxrender.pipelines.deferred import pack_gbuffer, tile_waves, unpack_gbuffer
-from jaxrender.pipelines.dispatch import shade_pixels
+import jaxrender.pipelines.dispatch as dispatch
+from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.gbuffer import shade_through
 from jaxrender.pipelines.pixel_ids import (
     ID_KINDS,
     check_choice,
@@ -52,8 +45,10 @@ from jaxrender.pipelines.pixel_ids import (
     surface_ids,
 )
 from jaxrender.pipelines.registry import REGISTRY, register
+from jaxrender.pipelines.visibility import points_from_vis, visibility
+from jaxrender.pipelines.waves import tile_waves
 from jaxrender.scene.camera import Camera
-from jaxrender.shading import shade
+from jaxrender.scene.reprojection import DEFAULT_DEPTH_TOLERANCE, reproject
 from jaxrender.types import Array, Frame
 
 PATTERNS = ("checker", "2x1")
@@ -152,40 +147,60 @@ def _history_sample(prev: History, position: Array, ids: Array):
     return colour, prev.valid & jnp.isfinite(best_d)
 
 
-def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
-    """One frame at traced index ``t`` given the previous frame's History (ignored when
-    ``prev.valid`` is False or ``cfg.temporal`` is off). Returns (Frame, History)."""
-    h, w = cfg.height, cfg.width
-    with jax.named_scope("visibility"):
-        vis = visibility(scene, camera, cfg)
-        covered = vis.tri_id >= 0
-        ids = surface_ids(scene, vis.tri_id, cfg.ids)
-    with jax.named_scope("plan"):
-        ins = [jnp.asarray(inside(h, w, dy, dx)) for dy, dx in NEIGHBOURS]
-        ncov = [i & shift(covered, dy, dx, False) for i, (dy, dx) in zip(ins, NEIGHBOURS)]
-        any_n = ncov[0] | ncov[1] | ncov[2] | ncov[3]
-        pattern = checker_mask(h, w, cfg.frame + t)
-        orphan = covered & ~pattern & ~any_n
-        active = covered & (pattern | orphan)
+class CheckerPlan(NamedTuple):
+    """Which pixels a frame shades: ``work`` (the flat pixels of ``active``), ``covered``,
+    ``active`` (the checker's pixels plus orphans, covered ones only), ``orphan`` (missing pixels
+    with no covered neighbour: shaded too), ``inside`` and ``neighbours`` (per NEIGHBOURS, the
+    neighbour lies in the image / is covered)."""
 
+    work: dispatch.WorkList
+    covered: Array
+    active: Array
+    orphan: Array
+    inside: list
+    neighbours: list
+
+
+def plan_checker(vis, t, cfg: CheckerboardConfig) -> CheckerPlan:
+    h, w = cfg.height, cfg.width
+    covered = vis.tri_id >= 0
+    ins = [jnp.asarray(inside(h, w, dy, dx)) for dy, dx in NEIGHBOURS]
+    ncov = [i & shift(covered, dy, dx, False) for i, (dy, dx) in zip(ins, NEIGHBOURS)]
+    any_n = ncov[0] | ncov[1] | ncov[2] | ncov[3]
+    pattern = checker_mask(h, w, cfg.frame + t)
+    orphan = covered & ~pattern & ~any_n
+    active = covered & (pattern | orphan)
+    return CheckerPlan(dispatch.WorkList.of(active.reshape(-1)), covered, active, orphan, ins,
+                       ncov)
+
+
+def shade_checker(scene, camera, vis, plan: CheckerPlan, cfg: CheckerboardConfig):
+    """The planned pixels shaded by the deferred lighting pass's path (as DACS), texture LOD
+    scaled by ``lod_bias`` (and twice wider for ``2x1``). Returns (float32[H, W, 3], WorkList)."""
+    h, w = cfg.height, cfg.width
     scale = 2.0 ** float(cfg.lod_bias)
     sx = scale * (2.0 if cfg.pattern == "2x1" else 1.0)
+    img, work = dispatch.shade(
+        plan.work, lambda items: lod_scaled(points_from_vis(scene, camera, vis, items), sx, scale),
+        lambda pts: shade_through(pts, scene, camera, pts.valid),
+        jnp.zeros((h * w, 3), jnp.float32), cfg.chunk)
+    return img.reshape(h, w, 3), work
 
-    def points_of(items):
-        return lod_scaled(points_from_vis(scene, camera, vis, items), sx, scale)
 
-    def shade_fn(pts):  # the deferred lighting pass's path, as DACS
-        rows = jax.lax.optimization_barrier(pack_gbuffer(pts))
-        return shade(unpack_gbuffer(rows, camera, pts.valid), scene)
+class Reconstruction(NamedTuple):
+    image: Array
+    use_history: Array
+    rejected: Array
 
-    with jax.named_scope("shade"):
-        img, dc = shade_pixels(active.reshape(-1), points_of, shade_fn,
-                               jnp.zeros((h * w, 3), jnp.float32), cfg.chunk)
-        img = img.reshape(h, w, 3)
 
-    missing = covered & ~active
+def reconstruct(img, vis, ids, camera, prev: History, plan: CheckerPlan,
+                cfg: CheckerboardConfig) -> Reconstruction:
+    """Missing pixels from the reprojected history where it holds the same surface, else from
+    their neighbours."""
+    h, w = cfg.height, cfg.width
+    missing = plan.covered & ~plan.active
     with jax.named_scope("spatial"):
-        spatial = _spatial(img, ids, vis.depth, ncov)
+        spatial = _spatial(img, ids, vis.depth, plan.neighbours)
     with jax.named_scope("temporal"):
         if cfg.temporal:
             rp = reproject(vis.depth, camera, prev.camera, w, h, prev_depth=prev.depth,
@@ -198,24 +213,44 @@ def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
         else:
             use_hist = rejected = jnp.zeros((h, w), bool)
             recon = spatial
-    image = jnp.where(active[..., None], img, jnp.where(missing[..., None], recon, 0.0))
-    image = poison_on_overflow(image, vis.counts["overflow"])
+    image = jnp.where(plan.active[..., None], img, jnp.where(missing[..., None], recon, 0.0))
+    return Reconstruction(image, use_hist, rejected)
 
+
+def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
+    """One frame at traced index ``t`` given the previous frame's History (ignored when
+    ``prev.valid`` is False or ``cfg.temporal`` is off). Returns (Frame, History)."""
+    with jax.named_scope("visibility"):
+        vis = visibility(scene, camera, cfg)
+        ids = surface_ids(scene, vis.tri_id, cfg.ids)
+    with jax.named_scope("plan"):
+        plan = plan_checker(vis, t, cfg)
+    with jax.named_scope("shade"):
+        img, work = shade_checker(scene, camera, vis, plan, cfg)
+    rec = reconstruct(img, vis, ids, camera, prev, plan, cfg)
+    image = poison_on_overflow(rec.image, vis.counts["overflow"])
     with jax.named_scope("counts"):
-        n_in = sum(i.astype(jnp.int32) for i in ins)
-        spatial_px = missing & ~use_hist
-        spatial_reads = jnp.sum(jnp.where(spatial_px, n_in, 0), dtype=jnp.int32)
-        history_reads = jnp.sum(use_hist, dtype=jnp.int32)
-        waves, util = tile_waves(active, cfg.wave_size, dc["invocations"])
-        counts = make_counts(
-            shade_invocations=dc["invocations"], covered_pixels=jnp.sum(covered, dtype=jnp.int32),
-            waves=waves, lane_utilization=util,
-            reconstruction_reads=spatial_reads + history_reads, spatial_reads=spatial_reads,
-            history_reads=history_reads, history_rejected=jnp.sum(rejected, dtype=jnp.int32),
-            orphans_shaded=jnp.sum(orphan, dtype=jnp.int32),
-            alpha_invocations=vis.counts["alpha_invocations"], overflow=vis.counts["overflow"])
-    frame = Frame(image, counts, {"shaded": active, "history": use_hist})
-    return frame, History(image, active, ids, vis.depth, camera, jnp.asarray(True))
+        counts = _counts(vis, plan, rec, work, cfg)
+    frame = Frame(image, counts, {"shaded": plan.active, "history": rec.use_history})
+    return frame, History(image, plan.active, ids, vis.depth, camera, jnp.asarray(True))
+
+
+def _counts(vis, plan: CheckerPlan, rec: Reconstruction, work: dispatch.WorkList,
+            cfg: CheckerboardConfig) -> dict:
+    n_in = sum(i.astype(jnp.int32) for i in plan.inside)
+    missing = plan.covered & ~plan.active
+    spatial_px = missing & ~rec.use_history
+    spatial_reads = jnp.sum(jnp.where(spatial_px, n_in, 0), dtype=jnp.int32)
+    history_reads = jnp.sum(rec.use_history, dtype=jnp.int32)
+    waves, util = tile_waves(plan.active, cfg.wave_size, work.invocations)
+    return make_counts(
+        shade_invocations=work.invocations,
+        covered_pixels=jnp.sum(plan.covered, dtype=jnp.int32),
+        waves=waves, lane_utilization=util,
+        reconstruction_reads=spatial_reads + history_reads, spatial_reads=spatial_reads,
+        history_reads=history_reads, history_rejected=jnp.sum(rec.rejected, dtype=jnp.int32),
+        orphans_shaded=jnp.sum(plan.orphan, dtype=jnp.int32),
+        alpha_invocations=vis.counts["alpha_invocations"], overflow=vis.counts["overflow"])
 
 
 def empty_history(camera, cfg) -> History:

@@ -32,20 +32,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.pipelines import dacs_warp
-from jaxrender.pipelines.base import (
-    PipelineConfig,
-    make_counts,
-    points_from_vis,
-    poison_on_overflow,
-    visibility,
-)
+import jaxrender.pipelines.dacs_warp as dacs_warp
+import jaxrender.pipelines.dispatch as dispatch
+from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.dacs_levels import SPACINGS, level_map, level_pixels, parent_pairs
-from jaxrender.pipelines.deferred import pack_gbuffer, unpack_gbuffer
-from jaxrender.pipelines.dispatch import compact, dispatch
+from jaxrender.pipelines.gbuffer import shade_through
 from jaxrender.pipelines.pixel_ids import ID_KINDS, LUMAS, SPACES, check_choice, luma, surface_ids
 from jaxrender.pipelines.registry import REGISTRY, register_frame
-from jaxrender.shading import shade
+from jaxrender.pipelines.visibility import points_from_vis, visibility
 from jaxrender.types import Array, Frame
 
 BORDERS = ("average", "shade")
@@ -151,8 +145,9 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
 
     ``shade_fn(pixels int32[c], live bool[c]) -> float32[c, 3]`` shades flat pixel indices;
     ``ids`` int32[H, W] surface ids (-1 uncovered); ``covered`` bool[H, W] (uncovered pixels are
-    never shaded and come out 0); ``border`` as DacsConfig. The levels run in a ``fori_loop`` (one copy of the shader in
-    the program); each level compacts its pixels to shade and dispatches them in chunks.
+    never shaded and come out 0); ``border`` as DacsConfig. The levels run in a ``fori_loop``
+    (one copy of the shader in the program); each level compacts its pixels to shade into a
+    work list and dispatches it in chunks.
     Returns (image float32[H, W, 3], shaded bool[H, W], level int32[H, W], counts)."""
     h, w = ids.shape
     n_pix = h * w
@@ -182,11 +177,11 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
             val = jnp.where((cov & ~need)[:, None], interp, 0.0)
             img = img.at[jnp.where(live, pix, n_pix)].set(val, mode="drop")
         with jax.named_scope("shade"):
-            work, n = compact(need)
-            img, dc = dispatch(pix[work], n, shade_fn, img, chunk)
+            listed = dispatch.WorkList.of(need)
+            img, work = dispatch.run(dispatch.WorkList(pix[listed.items], listed.count),
+                                     shade_fn, img, chunk)
         needs = needs.at[level].set(need)
-        return (img, needs, inv + dc["invocations"], lanes + dc["lanes"],
-                chunks + dc["chunks"])
+        return (img, needs, inv + work.invocations, lanes + work.lanes, chunks + work.chunks)
 
     z = jnp.int32(0)
     init = (jnp.zeros((n_pix, 3), jnp.float32), jnp.zeros((n_levels_, n_max), bool), z, z, z)
@@ -212,12 +207,9 @@ def frame(scene, camera, cfg: DacsConfig) -> Frame:
         ids = surface_ids(scene, vis.tri_id, cfg.ids)
 
     def shade_fn(items, live):
-        # The deferred lighting pass's own path (G-buffer channels -> points -> shade), on the
-        # attributes of just these pixels: DACS is deferred shading with an adaptive plan.
-        # The barrier keeps the G-buffer channels materialised as deferred's planes are, so that
-        # the compiler cannot fuse attribute and lighting math differently from deferred.
-        rows = jax.lax.optimization_barrier(pack_gbuffer(points_from_vis(scene, camera, vis, items)))
-        return shade(unpack_gbuffer(rows, camera, live), scene)
+        # The deferred lighting pass's own path on the attributes of just these pixels: DACS is
+        # deferred shading with an adaptive plan.
+        return shade_through(points_from_vis(scene, camera, vis, items), scene, camera, live)
 
     with jax.named_scope("dacs"):
         image, shaded, level, c = dacs_reconstruct(

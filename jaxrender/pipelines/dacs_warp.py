@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxrender.pipelines.waves import count_waves
 from jaxrender.types import Array
 
 WARP_WIDTHS = (32, 64)
@@ -51,8 +52,10 @@ def simulate_level(need: Array, width: int, batches: int) -> dict:
     i32 = lambda a: jnp.sum(a, dtype=jnp.int32)
     search = i32(searched)
     shade = i32(full) + i32(q > 0)
+    # The warps launched: the level's pixels in runs of per_warp, one warp per run.
+    launched, _ = count_waves(jnp.asarray([n], jnp.int32), per_warp, jnp.int32(0))
     return {"search_steps": search, "shade_steps": shade, "naive_shade_steps": i32(naive),
-            "searched": jnp.int32(n), "shaded": i32(need), "warps": jnp.int32(warps if n else 0)}
+            "searched": jnp.int32(n), "shaded": i32(need), "warps": launched}
 
 
 def simulate(needs: list[Array], width: int = 32, batches: int = 4) -> dict:

@@ -1,11 +1,11 @@
 """Work lists and chunked dispatch: the one place where shading work is launched.
 
 DESIGN principle 2: a pipeline that shades fewer points must run fewer shader evaluations.
-The points to shade are compacted into a work list (``compaction.compact_indices``), and ``shade()`` runs
-over it in chunks of a static size inside a ``lax.while_loop`` whose trip count is the number
-of chunks that hold work, like DispatchIndirect: the compiled program evaluates the shader
-``ceil(n / chunk)`` times, never over the full screen with a mask. Principle 3: the counts
-returned are read off that same work list (``n`` points, ``chunks * chunk`` lanes launched).
+The points to shade are compacted into a ``WorkList`` (``compaction.compact_indices``), and
+``shade()`` runs over it in chunks of a static size inside a ``lax.while_loop`` whose trip count
+is the number of chunks that hold work, like DispatchIndirect: the compiled program evaluates
+the shader ``ceil(n / chunk)`` times, never over the full screen with a mask. Principle 3: the
+counts are read off that same work list (``count`` items, ``chunks * chunk`` lanes launched).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.compaction import compact_indices
-from jaxrender.types import Array
+from jaxrender.types import Array, pytree_dataclass, static_field
 
 DEFAULT_CHUNK = 0  # auto: see auto_chunk
 MIN_CHUNK, MAX_CHUNK = 1 << 12, 1 << 18
@@ -28,10 +28,9 @@ def auto_chunk(capacity: int) -> int:
     capacity / 8, within [2^12, 2^18], so a full screen takes about eight iterations.
 
     Why not small: every iteration of the dispatch loop costs a fixed launch-and-sync overhead on
-    a GPU; measured on an H100 (2026-11-22, 1080p, 1.28M shaded pixels, deferred) 12.7 ms with
-    4096-lane chunks (313 iterations), 3.0 ms with 65536, 2.6 ms with 262144. Why not the whole
-    list: the last chunk's idle lanes are launched too (and counted in ``lanes``), so a pipeline
-    that shades little must not pay for a full screen."""
+    a GPU, which for a full screen in 4096-lane chunks is several times the shading itself.
+    Why not the whole list: the last chunk's idle lanes are launched too (and counted in
+    ``lanes``), so a pipeline that shades little must not pay for a full screen."""
     want = max(int(capacity) // 8, 1)
     return int(min(max(1 << (want - 1).bit_length(), MIN_CHUNK), MAX_CHUNK))
 
@@ -41,59 +40,93 @@ def resolve_chunk(chunk: int, capacity: int) -> int:
     return int(chunk) if int(chunk) > 0 else auto_chunk(capacity)
 
 
-def compact(active: Array) -> tuple[Array, Array]:
-    """Indices of the True entries of bool[N] in order, padded with 0, and their count."""
-    return compact_indices(active, active.shape[0])
+@pytree_dataclass
+class WorkList:
+    """A compacted work list and, once dispatched, what was launched for it.
 
-
-def dispatch(
-    work: Array, n: Array, fn: Callable[[Array, Array], Array], out: Array, chunk: int
-) -> tuple[Array, dict]:
-    """For the first ``n`` entries of the work list ``work`` (int32[N] item indices), write
-    ``fn(items int32[chunk], live bool[chunk]) -> values[chunk, ...]`` into ``out[items]``.
-
-    Runs ceil(n / chunk) iterations; padding lanes of the last chunk are passed live=False and
-    their results are discarded. ``chunk`` 0 picks ``auto_chunk`` for the list. Returns (out, counts) with ``invocations`` (= n, the live
-    lanes), ``lanes`` (chunks x chunk launched) and ``chunks``.
+    items int32[N]: item indices (pixels, samples, fragments, shadels), the first ``count``
+    live; count int32[]: live items. After ``run`` (or ``shade``): ``chunk`` (static lanes per
+    chunk) and ``invocations`` (lanes that wrote a result: ``count``, or fewer for lane lists
+    whose lanes are not one-to-one with outputs). ``chunks``, ``lanes`` and ``idle_lanes``
+    follow from them.
     """
-    chunk = int(min(resolve_chunk(chunk, work.shape[0]), max(work.shape[0], 1)))
-    padded = jnp.concatenate([work, jnp.zeros((chunk,), work.dtype)])
+
+    items: Array
+    count: Array
+    invocations: Array | None = None
+    chunk: int = static_field(default=0)
+
+    @classmethod
+    def of(cls, active: Array) -> "WorkList":
+        """The True entries of bool[N] in order (padded with 0) and their count."""
+        items, count = compact_indices(active, active.shape[0])
+        return cls(items, count)
+
+    @property
+    def chunks(self) -> Array:
+        return (self.count + self.chunk - 1) // self.chunk
+
+    @property
+    def lanes(self) -> Array:
+        """Lanes launched: whole chunks, the last one's idle lanes included."""
+        return self.chunks * self.chunk
+
+    @property
+    def idle_lanes(self) -> Array:
+        return self.lanes - self.invocations
+
+    @property
+    def counts(self) -> dict:
+        return {"invocations": self.invocations, "lanes": self.lanes, "chunks": self.chunks}
+
+
+def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
+        chunk: int) -> tuple[Array, WorkList]:
+    """For the live items of ``work``, write ``fn(items int32[chunk], live bool[chunk]) ->
+    values[chunk, ...]`` into ``out[items]``.
+
+    Runs ceil(count / chunk) iterations; padding lanes of the last chunk are passed live=False
+    and their results are discarded. ``chunk`` 0 picks ``auto_chunk`` for the list. Returns
+    (out, the work list with its dispatch counts).
+    """
+    items, n = work.items, work.count
+    chunk = int(min(resolve_chunk(chunk, items.shape[0]), max(items.shape[0], 1)))
+    padded = jnp.concatenate([items, jnp.zeros((chunk,), items.dtype)])
     n_chunks = (n + chunk - 1) // chunk
     sentinel = out.shape[0]  # out-of-range index: scatter drops the lane
 
     def body(k, acc):
         start = k * chunk
-        items = jax.lax.dynamic_slice(padded, (start,), (chunk,))
+        lane_items = jax.lax.dynamic_slice(padded, (start,), (chunk,))
         live = start + jnp.arange(chunk, dtype=jnp.int32) < n
-        vals = fn(items, live)
-        return acc.at[jnp.where(live, items, sentinel)].set(vals, mode="drop")
+        vals = fn(lane_items, live)
+        return acc.at[jnp.where(live, lane_items, sentinel)].set(vals, mode="drop")
 
     out = jax.lax.fori_loop(0, n_chunks, body, out)
-    counts = {"invocations": n, "lanes": n_chunks * chunk, "chunks": n_chunks}
-    return out, counts
+    return out, WorkList(items, n, n, chunk)
 
 
-def shade_pixels(
-    active: Array,
+def shade(
+    work: WorkList,
     points_of: Callable[[Array], object],
     shade_fn: Callable[[object], Array],
     out: Array,
     chunk: int = DEFAULT_CHUNK,
-) -> tuple[Array, dict]:
-    """Shade the pixels (or samples) flagged in bool[N] and write their colours into out[N, 3].
+) -> tuple[Array, WorkList]:
+    """Shade the items of ``work`` and write their colours (or any per-point result) into
+    ``out[items]``; other entries keep their value.
 
     ``points_of(items)`` builds the SurfacePoints of the given flat indices (gathering from the
-    visibility buffer); ``shade_fn(points)`` is the shared shader. Unflagged entries keep their
-    value in ``out``.
+    visibility buffer, a G-buffer, a fragment list); ``shade_fn(points)`` is the shared shader
+    (or the alpha test). Returns (out, the work list with its dispatch counts).
     """
-    work, n = compact(active)
 
     def fn(items, live):
         pts = points_of(items)
         pts = dataclasses.replace(pts, valid=pts.valid & live)
         return shade_fn(pts)
 
-    return dispatch(work, n, fn, out, chunk)
+    return run(work, fn, out, chunk)
 
 
 def dispatch_lanes(
@@ -101,14 +134,14 @@ def dispatch_lanes(
     fn: Callable[[Array, Array], tuple[Array, Array, Array]],
     out: Array,
     chunk: int = DEFAULT_CHUNK,
-) -> tuple[Array, dict]:
+) -> tuple[Array, WorkList]:
     """Launch lanes ``0 .. n-1`` in chunks: ``fn(lanes int32[chunk], live bool[chunk])`` returns
     ``(dest int32[chunk], values[chunk, ...], write bool[chunk])`` and ``out[dest] = values``
     where ``live & write``. For work whose lanes are not one-to-one with outputs (2x2 quads with
     helper lanes, waves with idle lanes): every lane is evaluated, only some write.
 
-    Returns (out, counts) with ``invocations`` (lanes that wrote), ``lanes`` (chunks x chunk
-    launched) and ``chunks``. ``chunk`` 0 picks ``auto_chunk`` for ``out``'s length.
+    Returns (out, the lane list as a WorkList: ``count`` n lanes, ``invocations`` the lanes
+    that wrote). ``chunk`` 0 picks ``auto_chunk`` for ``out``'s length.
     """
     chunk = resolve_chunk(chunk, out.shape[0])
     n_chunks = (n + chunk - 1) // chunk
@@ -124,4 +157,4 @@ def dispatch_lanes(
         return acc, wrote + jnp.sum(ok, dtype=jnp.int32)
 
     out, wrote = jax.lax.fori_loop(0, n_chunks, body, (out, jnp.int32(0)))
-    return out, {"invocations": wrote, "lanes": n_chunks * chunk, "chunks": n_chunks}
+    return out, WorkList(jnp.zeros((0,), jnp.int32), n, wrote, chunk)

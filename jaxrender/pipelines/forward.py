@@ -14,24 +14,27 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from jaxrender.pipelines.base import (PipelineConfig, clip_vertices, dispatch_points,
-                                      is_alpha_tested, make_counts, points_at,
-                                      points_at_xy, poison_on_overflow,
-                                      raster_fragments)
+import jaxrender.pipelines.dispatch as dispatch
+import jaxrender.raster.samples as sample_patterns
+from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.dispatch import dispatch_lanes
 from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of_segment_index,
                                        quad_list, segment_starts)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
-from jaxrender.raster import samples as sample_patterns
+from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
+                                            points_at_xy, raster_fragments)
+from jaxrender.pipelines.waves import count_waves
 from jaxrender.shading import alpha_test, shade
 from jaxrender.sorting import lex_sort
-from jaxrender.types import Frame
+from jaxrender.types import Array, Frame
 
 WAVE_SIZES = (32, 64)
+INF = float("inf")
 
 
 @dataclass(frozen=True)
@@ -56,136 +59,179 @@ class ForwardConfig(PipelineConfig):
             raise ValueError(f"wave_size must be 32 or 64, got {self.wave_size}")
 
 
+class DrawList(NamedTuple):
+    """The fragments of every sample in draw order: sorted by (sample, pixel, triangle), empty
+    entries last. ``seg`` marks each (sample, pixel)'s first fragment, ``slot`` is the fragment's
+    (sample, pixel) (S * P when empty), ``unit`` the fragment that represents its (triangle,
+    pixel) shading unit (under MSAA several samples share one)."""
+
+    skey: Array
+    pixel: Array
+    tri: Array
+    depth: Array
+    valid: Array
+    seg: Array
+    slot: Array
+    unit: Array
+    overflow: Array
+    fragments: Array
+
+
+def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
+    """The draw replayed from the fragment lists of every sample offset."""
+    n_s, n_pix, cap = len(offsets), cfg.width * cfg.height, cfg.capacity
+    lists = [raster_fragments(clip, scene.faces, cfg, cull_backfaces=cfg.cull_backfaces,
+                              sample_offset=o) for o in offsets]
+    cat = lambda f: jnp.concatenate([getattr(fr, f) for fr in lists])  # noqa: E731
+    valid = cat("valid")
+    samp = jnp.concatenate([jnp.full((cap,), s, jnp.int32) for s in range(n_s)])
+    skey = jnp.where(valid, samp, n_s)
+    # Draw order: per (sample, pixel), triangles in submission order; empty entries last.
+    n_tris = scene.faces.shape[0]
+    (skey, pixel, tri), (depth,) = lex_sort(
+        (skey, cat("pixel"), cat("tri")), (n_s, n_pix - 1, n_tris - 1), (cat("depth"),))
+    valid = skey < n_s
+    overflow = sum(fr.overflowed.astype(jnp.int32) for fr in lists)
+    n_fragments = sum(fr.count for fr in lists)
+    seg = segment_starts(skey, pixel)
+    slot = jnp.where(valid, skey * n_pix + pixel, n_s * n_pix)
+    unit = _units(tri, pixel, valid, n_s, n_tris, n_pix)
+    return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit, overflow, n_fragments)
+
+
+def _units(tri, pixel, valid, n_s: int, n_tris: int, n_pix: int) -> Array:
+    """The shader runs once per (triangle, pixel): under MSAA several sample fragments share
+    one unit, represented by its first fragment."""
+    n_frag = tri.shape[0]
+    if n_s == 1:
+        return jnp.arange(n_frag, dtype=jnp.int32)
+    idx = jnp.arange(n_frag, dtype=jnp.int32)
+    (t_b, p_b), (idx_b,) = lex_sort((jnp.where(valid, tri, BIG), pixel),
+                                    (n_tris - 1, n_pix - 1), (idx,))
+    rep = idx_b[first_of_segment_index(segment_starts(t_b, p_b))]
+    return jnp.zeros((n_frag,), jnp.int32).at[idx_b].set(rep)
+
+
+def _any_per_unit(draw: DrawList, flag: Array) -> Array:
+    n_frag = draw.tri.shape[0]
+    return jnp.zeros((n_frag,), jnp.int32).at[draw.unit].max(flag.astype(jnp.int32)) > 0
+
+
+def alpha_pass(scene, draw: DrawList, unit_points, cfg) -> tuple[Array, Array]:
+    """The fragments that survive the alpha test, and the alpha-test invocations. Only a
+    fragment in front of every earlier opaque fragment of its pixel can pass the depth test,
+    so only those are alpha-tested."""
+    valid = draw.valid
+    if not scene.effects.alpha_test:
+        return valid, jnp.int32(0)
+    tested = is_alpha_tested(scene, draw.tri) & valid
+    z_opaque = exclusive_segmented_cummin(jnp.where(valid & ~tested, draw.depth, INF), draw.seg)
+    need = _any_per_unit(draw, tested & (draw.depth < z_opaque))
+    keep_u, work = dispatch.shade(
+        dispatch.WorkList.of(need), unit_points,
+        lambda pts: alpha_test(pts, scene).astype(jnp.float32),
+        jnp.zeros((draw.tri.shape[0],), jnp.float32), cfg.chunk)
+    return valid & (~tested | (keep_u[draw.unit] > 0.5)), work.invocations
+
+
+def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
+    """The plan: (units to shade bool[F], the fragment each (sample, pixel) shows int32[S * P],
+    -1 for none). GL_LESS in draw order, or GL_EQUAL against the pre-pass depth."""
+    n_slots = n_s * cfg.width * cfg.height
+    zk = jnp.where(keep, draw.depth, INF)
+    zbuf = jnp.full((n_slots,), INF).at[draw.slot].min(zk, mode="drop")
+    z_final = zbuf.at[draw.slot].get(mode="fill", fill_value=-INF)
+    if cfg.z_prepass:
+        shaded = draw.valid & (draw.depth == z_final)  # GL_EQUAL against the pre-pass depth
+    else:
+        shaded = draw.valid & (draw.depth < exclusive_segmented_cummin(zk, draw.seg))  # GL_LESS
+    shade_unit = _any_per_unit(draw, shaded) if n_s > 1 else shaded
+    writer = shaded & keep
+    order = jnp.arange(draw.tri.shape[0], dtype=jnp.int32)
+    win = jnp.full((n_slots,), -1, jnp.int32).at[draw.slot].max(
+        jnp.where(writer, order, -1), mode="drop")
+    return shade_unit, win
+
+
 @register_frame("forward", ForwardConfig)
 def frame(scene, camera, cfg: ForwardConfig) -> Frame:
     """Forward shading in submission order (overdraw, 2x2 quads, optional Z pre-pass, MSAA)."""
-    w, h = cfg.width, cfg.height
-    n_pix, cap = w * h, cfg.capacity
     offsets = sample_patterns.msaa(cfg.msaa) if cfg.msaa > 1 else sample_patterns.CENTER
     n_s = len(offsets)
     clip = clip_vertices(scene, camera, cfg)
-
     with jax.named_scope("fragments"):
-        lists = [raster_fragments(clip, scene.faces, cfg, cull_backfaces=cfg.cull_backfaces,
-                                  sample_offset=o) for o in offsets]
-        cat = lambda f: jnp.concatenate([getattr(fr, f) for fr in lists])  # noqa: E731
-        valid = cat("valid")
-        samp = jnp.concatenate([jnp.full((cap,), s, jnp.int32) for s in range(n_s)])
-        skey = jnp.where(valid, samp, n_s)
-        # Draw order: per (sample, pixel), triangles in submission order; empty entries last.
-        n_tris = scene.faces.shape[0]
-        (skey, pixel, tri), (depth,) = lex_sort(
-            (skey, cat("pixel"), cat("tri")), (n_s, n_pix - 1, n_tris - 1), (cat("depth"),))
-        valid = skey < n_s
-        n_frag = skey.shape[0]
-        overflow = sum(fr.overflowed.astype(jnp.int32) for fr in lists)
-        n_fragments = sum(fr.count for fr in lists)
-        seg = segment_starts(skey, pixel)
-        slot = jnp.where(valid, skey * n_pix + pixel, n_s * n_pix)
+        draw = draw_list(scene, clip, offsets, cfg)
 
-    with jax.named_scope("units"):
-        # The shader runs once per (triangle, pixel): under MSAA several sample fragments share
-        # one unit, represented by its first fragment.
-        if n_s == 1:
-            unit = jnp.arange(n_frag, dtype=jnp.int32)
-        else:
-            idx = jnp.arange(n_frag, dtype=jnp.int32)
-            (t_b, p_b), (idx_b,) = lex_sort((jnp.where(valid, tri, BIG), pixel),
-                                            (n_tris - 1, n_pix - 1), (idx,))
-            rep = idx_b[first_of_segment_index(segment_starts(t_b, p_b))]
-            unit = jnp.zeros((n_frag,), jnp.int32).at[idx_b].set(rep)
+    def unit_points(items):
+        return points_at(scene, camera, clip, cfg, draw.tri[items], draw.pixel[items])
 
-        def any_per_unit(flag):
-            return jnp.zeros((n_frag,), jnp.int32).at[unit].max(flag.astype(jnp.int32)) > 0
-
-        def unit_points(items):
-            return points_at(scene, camera, clip, cfg, tri[items], pixel[items])
-
-    inf = float("inf")
     with jax.named_scope("alpha_test"):
-        tested = is_alpha_tested(scene, tri) & valid
-        alpha_inv = jnp.int32(0)
-        keep = valid
-        if scene.effects.alpha_test:
-            # Only a fragment in front of every earlier opaque fragment of its pixel can pass
-            # the depth test, so only those are alpha-tested.
-            z_opaque = exclusive_segmented_cummin(jnp.where(valid & ~tested, depth, inf), seg)
-            need = any_per_unit(tested & (depth < z_opaque))
-            keep_u, ac = dispatch_points(
-                need, unit_points, lambda pts: alpha_test(pts, scene).astype(jnp.float32),
-                jnp.zeros((n_frag,), jnp.float32), cfg.chunk)
-            keep = valid & (~tested | (keep_u[unit] > 0.5))
-            alpha_inv = ac["invocations"]
-
+        keep, alpha_invocations = alpha_pass(scene, draw, unit_points, cfg)
     with jax.named_scope("depth_test"):
-        zk = jnp.where(keep, depth, inf)
-        zbuf = jnp.full((n_s * n_pix,), inf).at[slot].min(zk, mode="drop")
-        z_final = zbuf.at[slot].get(mode="fill", fill_value=-inf)
-        if cfg.z_prepass:
-            shaded = valid & (depth == z_final)  # GL_EQUAL against the pre-pass depth
-        else:
-            shaded = valid & (depth < exclusive_segmented_cummin(zk, seg))  # GL_LESS
-        shade_unit = any_per_unit(shaded) if n_s > 1 else shaded
-        writer = shaded & keep
-        order = jnp.arange(n_frag, dtype=jnp.int32)
-        win = jnp.full((n_s * n_pix,), -1, jnp.int32).at[slot].max(
-            jnp.where(writer, order, -1), mode="drop")
-
+        shade_unit, win = depth_test(draw, keep, n_s, cfg)
     with jax.named_scope("quads"):
-        ql = quad_list(tri, pixel, shade_unit, w, h, n_tris)
-        n_quads = ql["n_quads"]
-
+        ql = quad_list(draw.tri, draw.pixel, shade_unit, cfg.width, cfg.height,
+                       scene.faces.shape[0])
     with jax.named_scope("shade"):
-        colours = jnp.zeros((n_frag, 3), jnp.float32)
+        colours = jnp.zeros((draw.tri.shape[0], 3), jnp.float32)
         if cfg.shade_helpers:
-            colours, dc = dispatch_lanes(n_quads * 4, _helper_lane_fn(scene, camera, clip, cfg,
-                                                                      ql, n_frag),
-                                         colours, cfg.chunk)
+            colours, work = dispatch_lanes(
+                ql["n_quads"] * 4, _helper_lane_fn(scene, camera, clip, cfg, ql), colours,
+                cfg.chunk)
         else:
-            colours, dc = dispatch_points(shade_unit, unit_points, lambda p: shade(p, scene),
-                                          colours, cfg.chunk)
-        invocations = dc["invocations"]
-
+            colours, work = dispatch.shade(dispatch.WorkList.of(shade_unit), unit_points,
+                                           lambda p: shade(p, scene), colours, cfg.chunk)
     with jax.named_scope("resolve"):
-        has = win >= 0
-        c = jnp.where(has[:, None], colours[unit[jnp.maximum(win, 0)]], 0.0)
-        image = jnp.mean(c.reshape(n_s, h, w, 3), axis=0)
-        covered = jnp.sum(jnp.any(has.reshape(n_s, n_pix), axis=0), dtype=jnp.int32)
-        image = poison_on_overflow(image, overflow)
-
+        image, covered = resolve_samples(colours, draw, win, n_s, cfg)
+        image = poison_on_overflow(image, draw.overflow)
     with jax.named_scope("counts"):
-        n_mat = scene.materials.albedo.shape[0]
-        mat_q = scene.tri_material[jnp.where(ql["start"], ql["tri"], 0)]
-        quads_per_mat = jnp.zeros((n_mat,), jnp.int32).at[mat_q].add(
-            ql["start"].astype(jnp.int32))
-        ws = cfg.wave_size
-        waves = jnp.sum((quads_per_mat * 4 + ws - 1) // ws, dtype=jnp.int32)
-        lanes = n_quads * 4
-        per_pixel = jnp.zeros((n_pix,), jnp.int32).at[jnp.where(shade_unit, pixel, n_pix)].add(
-            1, mode="drop")
-        counts = make_counts(
-            shade_invocations=invocations,
-            helper_lanes=lanes - invocations,
-            covered_pixels=covered,
-            waves=waves,
-            lane_utilization=invocations.astype(jnp.float32)
-            / jnp.maximum(waves * ws, 1).astype(jnp.float32),
-            quads=n_quads,
-            # The shader's live lanes: the shaded units, plus the helper lanes when they run.
-            shader_evaluations=lanes if cfg.shade_helpers else invocations,
-            fragments=n_fragments,
-            alpha_invocations=alpha_inv,
-            overflow=overflow,
-        )
-    aux = {"shade_count": per_pixel.reshape(h, w)}
-    return Frame(image, counts, aux)
+        counts = _counts(scene, draw, ql, work.invocations, covered, alpha_invocations, cfg)
+    per_pixel = jnp.zeros((cfg.width * cfg.height,), jnp.int32).at[
+        jnp.where(shade_unit, draw.pixel, cfg.width * cfg.height)].add(1, mode="drop")
+    return Frame(image, counts, {"shade_count": per_pixel.reshape(cfg.height, cfg.width)})
+
+
+def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
+    """Each (sample, pixel) shows its winning fragment's unit colour; samples are averaged.
+    Returns (image float32[H, W, 3], covered pixels int32)."""
+    h, w = cfg.height, cfg.width
+    has = win >= 0
+    c = jnp.where(has[:, None], colours[draw.unit[jnp.maximum(win, 0)]], 0.0)
+    image = jnp.mean(c.reshape(n_s, h, w, 3), axis=0)
+    covered = jnp.sum(jnp.any(has.reshape(n_s, h * w), axis=0), dtype=jnp.int32)
+    return image, covered
+
+
+def _counts(scene, draw: DrawList, ql, invocations, covered, alpha_invocations, cfg) -> dict:
+    """Waves: the quads of one material are packed into waves of their own."""
+    n_mat = scene.materials.albedo.shape[0]
+    mat_q = scene.tri_material[jnp.where(ql["start"], ql["tri"], 0)]
+    quads_per_mat = jnp.zeros((n_mat,), jnp.int32).at[mat_q].add(ql["start"].astype(jnp.int32))
+    waves, util = count_waves(quads_per_mat * 4, cfg.wave_size, invocations)
+    lanes = ql["n_quads"] * 4
+    return make_counts(
+        shade_invocations=invocations,
+        helper_lanes=lanes - invocations,
+        covered_pixels=covered,
+        waves=waves,
+        lane_utilization=util,
+        quads=ql["n_quads"],
+        # The shader's live lanes: the shaded units, plus the helper lanes when they run.
+        shader_evaluations=lanes if cfg.shade_helpers else invocations,
+        fragments=draw.fragments,
+        alpha_invocations=alpha_invocations,
+        overflow=draw.overflow,
+    )
+
 
 render = REGISTRY["forward"].render  # the compiled, overflow-checked entry
 
-def _helper_lane_fn(scene, camera, clip, cfg, ql, n_frag):
+
+def _helper_lane_fn(scene, camera, clip, cfg, ql):
     """Lane ``4 q + k`` is pixel k of quad q; it writes the colour of its unit if the unit is
     shaded, and otherwise runs as a helper lane (its result is dropped)."""
     qw = (cfg.width + 1) // 2
+    n_frag = ql["tri"].shape[0]
 
     def fn(lanes, live):
         q, k = lanes // 4, lanes % 4

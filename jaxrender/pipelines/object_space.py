@@ -17,16 +17,19 @@ when its inputs did not change (no view-dependent effect, or the eye did not mov
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow, visibility
-from jaxrender.pipelines.dispatch import shade_pixels
+import jaxrender.pipelines.dispatch as dispatch
+from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.os_alloc import allocate
 from jaxrender.pipelines.os_marking import footprint, mark_chunks, mark_shadels, taps
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
 from jaxrender.pipelines.registry import REGISTRY, register
+from jaxrender.pipelines.visibility import visibility
+from jaxrender.pipelines.waves import count_waves
 from jaxrender.shading import shade, surface_points
 from jaxrender.types import Array, Frame, pytree_dataclass
 
@@ -172,26 +175,38 @@ def shadel_points(scene, camera, sheet: ShadeSheet, slot_chunk: Array, items: Ar
 # ---------------------------------------------------------------- one frame
 
 
-def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: StoreState,
-               shade_frame: Array) -> tuple[Frame, StoreState]:
-    """One frame from the store of the previous one. ``shade_frame`` (bool scalar): this is a
-    shading frame; otherwise every resident chunk is reused."""
-    w, h = cfg.width, cfg.height
-    cap = cfg.store_chunks
-    nc = sheet.n_chunks
-    with jax.named_scope("visibility"):
-        vis = visibility(scene, camera, cfg)
-        flat = lambda a: a.reshape((w * h,) + a.shape[2:])
-        tri = flat(vis.tri_id)
-        fp = footprint(scene, sheet, tri, flat(vis.bary), flat(vis.dbary_dx), flat(vis.dbary_dy))
+class Residency(NamedTuple):
+    """The store after marking and allocation: ``al`` (os_alloc's Allocation), ``live`` bool[cap]
+    (slots in use), ``owned`` bool[NC, 64] (shadels with an owner triangle), ``owned_slot``
+    bool[cap, 64], ``reused`` bool[cap] (slots whose colours are kept from the previous frame)
+    and ``colour`` float32[cap * 64, 3] (the kept colours, 0 elsewhere)."""
 
+    al: object
+    live: Array
+    owned: Array
+    owned_slot: Array
+    reused: Array
+    colour: Array
+
+
+class Resolved(NamedTuple):
+    image: Array
+    missing: Array  # taps whose chunk is not resident
+    unowned: Array  # taps that read a shadel no triangle owns
+    overflow: Array
+
+
+def plan_store(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: StoreState,
+               fp, shade_frame: Array) -> Residency:
+    """Mark the chunks the screen reads, allocate them in the store, and keep the colours of
+    those resident from the previous frame when nothing they depend on changed."""
+    cap = cfg.store_chunks
     with jax.named_scope("mark_allocate"):
         al = allocate(fp, sheet, cap, cfg.mip_bias, cfg.bias_step, cfg.filter, cfg.aniso_taps)
         live = jnp.arange(cap, dtype=jnp.int32) < al.n_alloc  # slots in use
         v_of_slot = jnp.maximum(al.slot_chunk, 0)
-        owned = (sheet.owner.reshape(nc, LANES) >= 0)  # [NC, 64]
+        owned = (sheet.owner.reshape(sheet.n_chunks, LANES) >= 0)  # [NC, 64]
         owned_slot = owned[v_of_slot] & live[:, None]  # [cap, 64]
-
     with jax.named_scope("reuse"):
         view_dependent = bool(scene.effects.specular)
         same_inputs = jnp.all(state.eye == camera.eye) if view_dependent else jnp.bool_(True)
@@ -201,42 +216,58 @@ def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
         src = jnp.maximum(prev, 0)[:, None] * LANES + jnp.arange(LANES, dtype=jnp.int32)[None, :]
         colour = jnp.where(reused[:, None, None], state.colour[src],
                            0.0).reshape(cap * LANES, 3)
+    return Residency(al, live, owned, owned_slot, reused, colour)
 
+
+def resolve_taps(colour: Array, sheet: ShadeSheet, al, vis, cfg) -> Resolved:
+    """Each pixel's filtered read of the store (its taps' weighted sum)."""
+    t = al.taps
+    slot = al.page[t.chunk]
+    use = t.weight > 0.0
+    addr = jnp.where(use & (slot >= 0), slot * LANES + t.lane, 0)
+    weight = jnp.where(use & (slot >= 0), t.weight, 0.0)
+    # Tap by tap, written out: as one sum over the tap axis XLA writes every product [P, K, 3]
+    # to memory before adding them up.
+    image = colour[addr[:, 0]] * weight[:, 0, None]
+    for k in range(1, addr.shape[1]):
+        image = image + colour[addr[:, k]] * weight[:, k, None]
+    image = image.reshape(cfg.height, cfg.width, 3)
+    missing = jnp.sum(use & (slot < 0), dtype=jnp.int32)
+    unowned = jnp.sum(use & (sheet.owner[t.chunk * LANES + t.lane] < 0), dtype=jnp.int32)
+    overflow = al.overflow + vis.counts["overflow"] + (missing > 0).astype(jnp.int32)
+    return Resolved(poison_on_overflow(image, overflow), missing, unowned, overflow)
+
+
+def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: StoreState,
+               shade_frame: Array) -> tuple[Frame, StoreState]:
+    """One frame from the store of the previous one. ``shade_frame`` (bool scalar): this is a
+    shading frame; otherwise every resident chunk is reused."""
+    n_pix = cfg.width * cfg.height
+    with jax.named_scope("visibility"):
+        vis = visibility(scene, camera, cfg)
+        flat = lambda a: a.reshape((n_pix,) + a.shape[2:])  # noqa: E731
+        fp = footprint(scene, sheet, flat(vis.tri_id), flat(vis.bary), flat(vis.dbary_dx),
+                       flat(vis.dbary_dy))
+    res = plan_store(scene, sheet, camera, cfg, state, fp, shade_frame)
     with jax.named_scope("shade"):
-        active = (owned_slot & (live & ~reused)[:, None]).reshape(-1)
-        colour, dc = shade_pixels(
-            active, lambda it: shadel_points(scene, camera, sheet, al.slot_chunk, it, cfg.eps),
-            lambda pts: shade(pts, scene), colour, cfg.chunk)
-
+        active = (res.owned_slot & (res.live & ~res.reused)[:, None]).reshape(-1)
+        colour, work = dispatch.shade(
+            dispatch.WorkList.of(active),
+            lambda it: shadel_points(scene, camera, sheet, res.al.slot_chunk, it, cfg.eps),
+            lambda pts: shade(pts, scene), res.colour, cfg.chunk)
     with jax.named_scope("resolve"):
-        t = al.taps
-        slot = al.page[t.chunk]
-        use = t.weight > 0.0
-        addr = jnp.where(use & (slot >= 0), slot * LANES + t.lane, 0)
-        weight = jnp.where(use & (slot >= 0), t.weight, 0.0)
-        # Tap by tap, written out: as one sum over the tap axis XLA wrote every product
-        # [P, K, 3] (200 MB at 1080p) before adding them up (1.0 ms on an H100, 2026-11-23).
-        image = colour[addr[:, 0]] * weight[:, 0, None]
-        for k in range(1, addr.shape[1]):
-            image = image + colour[addr[:, k]] * weight[:, k, None]
-        image = image.reshape(h, w, 3)
-        missing = jnp.sum(use & (slot < 0), dtype=jnp.int32)
-        unowned = jnp.sum(use & (sheet.owner[t.chunk * LANES + t.lane] < 0), dtype=jnp.int32)
-        overflow = al.overflow + vis.counts["overflow"] + (missing > 0).astype(jnp.int32)
-        image = poison_on_overflow(image, overflow)
-
+        out = resolve_taps(colour, sheet, res.al, vis, cfg)
     with jax.named_scope("counts"):
-        counts, aux = _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing,
-                              unowned, overflow, vis)
-    new_state = StoreState(al.page, colour,
+        counts, aux = _counts(scene, sheet, cfg, fp, res, work, out, vis)
+    new_state = StoreState(res.al.page, colour,
                            jnp.where(shade_frame, camera.eye, state.eye).astype(jnp.float32))
-    return Frame(image, counts, aux), new_state
+    return Frame(out.image, counts, aux), new_state
 
 
-def _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing, unowned,
-            overflow, vis):
+def _counts(scene, sheet, cfg, fp, res: Residency, work: dispatch.WorkList, out: Resolved, vis):
     w, h = cfg.width, cfg.height
     nc = sheet.n_chunks
+    al, owned, owned_slot, reused = res.al, res.owned, res.owned_slot, res.reused
     t = al.taps
     covered = jnp.sum(fp.covered, dtype=jnp.int32)
     needed = mark_shadels(t, nc).reshape(nc, LANES) & owned  # [NC, 64]
@@ -244,21 +275,21 @@ def _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing, u
     own_n = jnp.sum(owned, axis=1, dtype=jnp.int32)
     alloc_shadels = jnp.sum(owned_slot, dtype=jnp.int32)
     alloc_lanes = al.n_alloc * LANES
-    chunks_shaded = jnp.sum((jnp.arange(owned_slot.shape[0]) < al.n_alloc) & ~reused,
-                            dtype=jnp.int32)
-    inv = dc["invocations"]
-    ws = cfg.wave_size
-    waves = chunks_shaded * (LANES // ws)
+    shaded_chunk = (jnp.arange(owned_slot.shape[0]) < al.n_alloc) & ~reused
+    chunks_shaded = jnp.sum(shaded_chunk, dtype=jnp.int32)
+    inv = work.invocations
+    # A shaded chunk launches all its 64 lanes (the unowned shadels idle).
+    waves, util = count_waves(jnp.where(shaded_chunk, LANES, 0), cfg.wave_size, inv)
     finest = jnp.sum(mark_chunks(taps(fp, sheet, al.bias, "finest", cfg.aniso_taps), nc),
                      dtype=jnp.int32)
     taps_read = jnp.sum(t.weight > 0.0, dtype=jnp.int32)
-    f32 = lambda x: jnp.asarray(x).astype(jnp.float32)
+    f32 = lambda x: jnp.asarray(x).astype(jnp.float32)  # noqa: E731
     counts = make_counts(
         shade_invocations=inv,
         helper_lanes=chunks_shaded * LANES - inv,
         covered_pixels=covered,
         waves=waves,
-        lane_utilization=f32(inv) / jnp.maximum(f32(waves * ws), 1.0),
+        lane_utilization=util,
         bytes_intermediate=(inv + jnp.sum(reused, dtype=jnp.int32) * LANES + taps_read)
         * SHADEL_BYTES,
         shadels_shaded=inv,
@@ -277,10 +308,10 @@ def _counts(scene, sheet, cfg, fp, al, owned, owned_slot, reused, dc, missing, u
         mip_bias_steps=al.bias_steps,
         trilinear_overhead=f32(al.n_alloc) / jnp.maximum(f32(finest), 1.0),
         mip_chain_memory=jnp.float32(sheet.n_chunks / max(sheet.level0_chunks, 1)),
-        missing_taps=missing,
-        unowned_taps=unowned,
+        missing_taps=out.missing,
+        unowned_taps=out.unowned,
         alpha_invocations=vis.counts["alpha_invocations"],
-        overflow=overflow,
+        overflow=out.overflow,
     )
     # Oxide's marking view: per pixel, the chunk its heaviest tap reads: 1 hit, 2 fully visible
     # (every owned shadel of the chunk is needed).

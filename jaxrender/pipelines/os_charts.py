@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jaxrender.pipelines.os_texels import raster_st, tri_area2
+
 OVERLAP_GRID = 256  # texels per side of the uniqueness test
 XATLAS_PADDING = 2  # texels between charts at level 0
 _CACHE: OrderedDict = OrderedDict()
@@ -35,14 +37,6 @@ class ObjectChart:
     uv_extent: float
 
 
-def _tri_area2(p: np.ndarray) -> np.ndarray:
-    """Twice the area of triangles p[T, 3, D] (D = 2 or 3)."""
-    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    if p.shape[-1] == 2:
-        return np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-    return np.linalg.norm(np.cross(e1, e2), axis=-1)
-
-
 def _fit_unit(uv: np.ndarray, margin: float) -> tuple[np.ndarray, float]:
     """uv[T, 3, 2] -> chart coordinates in [margin, 1 - margin]^2 (uniform scale, t down)."""
     lo, hi = uv.reshape(-1, 2).min(0), uv.reshape(-1, 2).max(0)
@@ -54,14 +48,12 @@ def _fit_unit(uv: np.ndarray, margin: float) -> tuple[np.ndarray, float]:
 
 def own_uvs_unique(corner_st: np.ndarray, world_area2: np.ndarray) -> bool:
     """True when no uv triangle is degenerate (unless its world area is) and none overlap."""
-    uv_area2 = _tri_area2(corner_st)
+    uv_area2 = tri_area2(corner_st)
     scale = max(float(np.max(world_area2, initial=0.0)), 1e-30)
     if np.any((uv_area2 <= 1e-12) & (world_area2 > 1e-9 * scale)):
         return False
     if 0.5 * uv_area2.sum() > 1.0 + 1e-6:  # more uv area than the unit square: overlap for sure
         return False
-    from jaxrender.pipelines.os_sheet import raster_st
-
     _, hits = raster_st(corner_st, OVERLAP_GRID)
     return bool(hits.max(initial=0) <= 1)
 
@@ -113,7 +105,7 @@ def object_charts(scene, xatlas_resolution: int = 1024, force_xatlas: bool = Fal
         tris = np.nonzero(obj == o)[0]
         f = faces[tris]
         own, ext = _fit_unit(uvs[f], margin=0.0)
-        if not force_xatlas and tris.size and own_uvs_unique(own, _tri_area2(pos[f])):
+        if not force_xatlas and tris.size and own_uvs_unique(own, tri_area2(pos[f])):
             out.append(ObjectChart(tris, own, "own", ext))
         elif tris.size:
             out.append(ObjectChart(tris, xatlas_chart(pos, f, xatlas_resolution), "xatlas", ext))

@@ -9,7 +9,7 @@ import dataclasses
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.metrics.display import srgb_encode
+from jaxrender.shading.srgb import srgb_encode
 from jaxrender.types import Array, SurfacePoints
 
 ID_KINDS = ("triangle", "object", "material", "none")

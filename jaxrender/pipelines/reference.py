@@ -27,15 +27,16 @@ from typing import ClassVar
 import jax
 import jax.numpy as jnp
 
-from jaxrender.pipelines.dispatch import shade_pixels
+import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines.registry import REGISTRY, RenderConfig, register_frame
-from jaxrender.raster.coverage import EMPTY_KEY, depth_key
-from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
-from jaxrender.raster.resolve import barycentrics_at, resolve
+from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
+                                        sample_visibility)
+from jaxrender.raster.resolve import barycentrics_at
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.camera import Camera, world_to_clip
 from jaxrender.scene.scene import Scene
 from jaxrender.shading import alpha_test, shade, surface_points
+from jaxrender.shading.srgb import srgb_encode
 from jaxrender.types import Array, Frame
 
 # Chosen from the convergence check (python benchmarks/bench_reference.py --convergence
@@ -81,41 +82,27 @@ def _bary_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, w: int, 
 
 
 def _visibility(scene: Scene, camera: Camera, clip: Array, offset: Array, cfg, inv_k: Array):
-    """VisBuffer (H, W) of one sample at the traced fixed-point offset int64[2]; fragments
-    failing the alpha test are discarded before the depth test. Returns (vis, counts)."""
+    """VisBuffer (H, W) of one sample at the traced fixed-point offset; fragments failing the
+    alpha test are discarded before the depth test. Returns (vis, counts)."""
     w, h = cfg.width, cfg.height
-    n_pix = w * h
     faces = scene.faces
     n_tris = faces.shape[0]
     off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
-    test_alpha = scene.effects.alpha_test
 
-    def scatter_min(st, c):
-        zb, frags = st
-        covered = c.covered
-        if test_alpha:
-            with jax.enable_x64(False):
-                tri = jnp.where(covered, c.tri, 0).astype(jnp.int32)
-                x = c.px.astype(jnp.float32) + off_px[0]
-                y = c.py.astype(jnp.float32) + off_px[1]
-                b, bx, by = _bary_at(tri, x, y, clip, faces, w, h)
-                pts = surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
-                keep = alpha_test(pts, scene)
-            covered = covered & keep
-        pix = jnp.where(covered, c.py * w + c.px, n_pix)
-        zb = zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop")
-        return zb, frags + jnp.sum(c.covered, dtype=jnp.int64)
+    def alpha_keep(c):
+        with jax.enable_x64(False):
+            tri = jnp.where(c.covered, c.tri, 0).astype(jnp.int32)
+            x = c.px.astype(jnp.float32) + off_px[0]
+            y = c.py.astype(jnp.float32) + off_px[1]
+            b, bx, by = _bary_at(tri, x, y, clip, faces, w, h)
+            pts = surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
+            return alpha_test(pts, scene)
 
-    with jax.enable_x64(True):
-        zbuf = jnp.full((n_pix,), EMPTY_KEY, jnp.int64)
-        (zbuf, frags), counts = traverse(
-            clip, faces, w, h, False, offset.astype(jnp.int64),
-            default_work_capacity(n_tris, w, h), default_clip_capacity(n_tris),
-            (zbuf, jnp.int64(0)), scatter_min,
-        )
-        vis = resolve(zbuf, clip, faces, w, h, off_px)
-        counts = {key: v.astype(jnp.int32) for key, v in dict(counts, fragments=frags).items()}
-    return vis, counts
+    vis, counts = sample_visibility(
+        clip, faces, w, h, offset, work_capacity=default_work_capacity(n_tris, w, h),
+        clip_capacity=default_clip_capacity(n_tris),
+        keep=alpha_keep if scene.effects.alpha_test else None)
+    return vis, {key: v.astype(jnp.int32) for key, v in counts.items()}
 
 
 # ------------------------------------------------------------------ the render
@@ -152,10 +139,11 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
             return surface_points(scene, camera, tri[items], bary[items], ddx[items], ddy[items])
 
         with jax.named_scope("shade"):
-            rgb, sc = shade_pixels(tri >= 0, points_of, lambda p: shade(p, scene),
-                                   jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
-        new = {"shade_invocations": sc["invocations"], "lanes": sc["lanes"],
-               "chunks": sc["chunks"], "fragments": rc["fragments"],
+            rgb, work = dispatch.shade(dispatch.WorkList.of(tri >= 0), points_of,
+                                       lambda p: shade(p, scene),
+                                       jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
+        new = {"shade_invocations": work.invocations, "lanes": work.lanes,
+               "chunks": work.chunks, "fragments": rc["fragments"],
                "work_items": rc["work_items"]}
         counts = {key: counts[key] + new[key] for key in counts}
         return acc + rgb, any_cov | (tri >= 0), counts
@@ -176,9 +164,7 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
 def ldr_psnr(a: Array, b: Array) -> Array:
     """PSNR in dB of the display-referred (clamped, sRGB-encoded) images, data range 1;
     over the trailing (H, W, 3) axes. +inf for identical images."""
-    from jaxrender.metrics.display import to_display
-
-    d = to_display(a) - to_display(b)
+    d = srgb_encode(jnp.clip(a, 0.0, 1.0)) - srgb_encode(jnp.clip(b, 0.0, 1.0))
     mse = jnp.mean(d * d, axis=(-3, -2, -1))
     return 10.0 * jnp.log10(1.0 / mse)
 

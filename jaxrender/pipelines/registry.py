@@ -29,6 +29,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Callable, ClassVar
 
+import jaxrender.pipelines.program as program
+
 
 @dataclass(frozen=True)
 class RenderConfig:
@@ -75,16 +77,12 @@ class Pipeline:
 
     def render(self, scene, camera, cfg):
         """One frame from ``init`` (frame index 0): a Frame with image (H, W, 3)."""
-        from jaxrender.pipelines import program
-
         return program.render(self, scene, camera, cfg)
 
     def render_sequence(self, scene, cameras, cfg, *, warmup_frames: int = 0):
         """Frames of a camera path (CameraPath, a Camera batched over a leading axis T, or a
         list of cameras), the state carried from frame to frame; the first ``warmup_frames``
         are rendered and dropped. A Frame with image (T', H, W, 3), counts (T',)."""
-        from jaxrender.pipelines import program
-
         return program.render_sequence(self, scene, cameras, cfg, warmup_frames=warmup_frames)
 
 
@@ -143,7 +141,8 @@ def register_frame(name: str, config_cls: type, description: str = "", *,
 
 
 def get_pipeline(name: str) -> Pipeline:
-    _load_builtin_pipelines()
+    """The registered pipeline ``name``. Importing any module of ``jaxrender.pipelines`` runs the
+    package's ``__init__`` first, which imports (and so registers) every built-in pipeline."""
     try:
         return REGISTRY[name]
     except KeyError:
@@ -165,10 +164,4 @@ def make_config(name: str, **params):
 
 
 def list_pipelines() -> list[Pipeline]:
-    _load_builtin_pipelines()
     return [REGISTRY[k] for k in sorted(REGISTRY)]
-
-
-def _load_builtin_pipelines() -> None:
-    # Importing the package imports every pipeline module, each of which registers itself.
-    import jaxrender.pipelines  # noqa: F401

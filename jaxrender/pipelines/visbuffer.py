@@ -13,26 +13,28 @@ Waves of coarse pixels are formed on the coarse grid of their rate.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.pipelines.base import (PipelineConfig, clip_vertices, dispatch, make_counts,
-                                      points_at, poison_on_overflow, visibility)
+import jaxrender.pipelines.dispatch as dispatch
+from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.quads import BIG, first_of_segment_index, segment_starts
 from jaxrender.pipelines.registry import REGISTRY, register_frame
+from jaxrender.pipelines.visibility import clip_vertices, points_at, visibility
+from jaxrender.pipelines.waves import TILE, count_waves, segment_lanes
 from jaxrender.scene.camera import world_to_clip
 from jaxrender.shading import shade
 from jaxrender.sorting import lex_sort
-from jaxrender.types import Frame
+from jaxrender.types import Array, Frame
 
 EMPTY_ID = 0xFFFFFFFF
 RATES = ("1x1", "1x2", "2x1", "2x2")  # width x height, as D3D12_SHADING_RATE_AxB
 RATE_W = (1, 1, 2, 2)
 RATE_H = (1, 2, 1, 2)
 VRS_MODES = ("off", "fixed", "distance", "speed", "image")
-TILE = 8
 
 
 @dataclass(frozen=True)
@@ -214,49 +216,66 @@ def pixel_rates(scene, camera, cfg, tri) -> jax.Array:
     return triangle_rates(scene, camera, cfg)[jnp.maximum(tri, 0)]
 
 
+class ShadePlan(NamedTuple):
+    """The coarse-pixel plan: ``work`` lists the anchors (the first pixel of each coarse pixel)
+    ordered by (material, rate, tile, wave); ``anchor`` int32[P] is each pixel's anchor,
+    ``is_anchor`` bool[P]; ``wave_lanes`` int32[P], the lanes of each wave group of the sorted
+    list; ``rate`` int32[P]."""
+
+    work: dispatch.WorkList
+    anchor: Array
+    is_anchor: Array
+    wave_lanes: Array
+    rate: Array
+
+
+def plan_coarse_pixels(scene, camera, tri, cfg: VisBufferConfig) -> ShadePlan:
+    """One shade per (material, rate, aligned block), at its first pixel; the work list in
+    wave order: coarse pixels of one material and rate, by 8x8 tile of the coarse grid."""
+    w, h = cfg.width, cfg.height
+    n_pix = w * h
+    covered = tri >= 0
+    mat = jnp.where(covered, scene.tri_material[jnp.maximum(tri, 0)], BIG).reshape(-1)
+    rate = pixel_rates(scene, camera, cfg, tri).reshape(-1)
+    pix = jnp.arange(n_pix, dtype=jnp.int32)
+    x, y = pix % w, pix // w
+    rw = jnp.asarray(RATE_W, jnp.int32)[rate]
+    rh = jnp.asarray(RATE_H, jnp.int32)[rate]
+    bx, by = x // rw, y // rh
+    n_mat = scene.materials.albedo.shape[0]
+    n_rates = len(RATES)
+    (m_s, r_s, by_s, bx_s, p_s), _ = lex_sort(
+        (mat, rate, by, bx, pix), (n_mat - 1, n_rates - 1, h - 1, w - 1, n_pix - 1))
+    live = m_s != BIG
+    start = segment_starts(m_s, r_s, by_s, bx_s) & live
+    anchor_sorted = p_s[first_of_segment_index(start)]
+    # p_s is a permutation: unique indices let the scatters be plain stores.
+    anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted, unique_indices=True)
+    is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start, unique_indices=True)
+    tiles_w = -(-w // TILE)
+    tile = (by // TILE) * tiles_w + bx // TILE
+    sub = ((by % TILE) * TILE + bx % TILE) // cfg.wave_size
+    big = lambda a: jnp.where(is_anchor, a, BIG)  # noqa: E731
+    n_tiles = tiles_w * -(-h // TILE)
+    (wm, wr, wt, wsub), (work,) = lex_sort(
+        (big(mat), big(rate), big(tile), big(sub)),
+        (n_mat - 1, n_rates - 1, n_tiles - 1, TILE * TILE // cfg.wave_size), (pix,))
+    n_work = jnp.sum(is_anchor, dtype=jnp.int32)
+    wave_lanes = segment_lanes(segment_starts(wm, wr, wt, wsub), wm != BIG)
+    return ShadePlan(dispatch.WorkList(work, n_work), anchor, is_anchor, wave_lanes, rate)
+
+
 @register_frame("visbuffer", VisBufferConfig)
 def frame(scene, camera, cfg: VisBufferConfig) -> Frame:
     """Visibility buffer: packed 32-bit ids, shading from the id in material tiles/waves, VRS."""
     w, h = cfg.width, cfg.height
-    n_pix = w * h
     layout = cfg.layout
     with jax.named_scope("visibility"):
         vis = visibility(scene, camera, cfg)
         ids, id_overflow = encode(scene, vis.tri_id, layout)  # the buffer the raster pass writes
-
     with jax.named_scope("classify"):
         tri = decode(scene, ids, layout)  # the classification pass reads the ids
-        covered = tri >= 0
-        mat = jnp.where(covered, scene.tri_material[jnp.maximum(tri, 0)], BIG).reshape(-1)
-        rate = pixel_rates(scene, camera, cfg, tri).reshape(-1)
-        pix = jnp.arange(n_pix, dtype=jnp.int32)
-        x, y = pix % w, pix // w
-        rw = jnp.asarray(RATE_W, jnp.int32)[rate]
-        rh = jnp.asarray(RATE_H, jnp.int32)[rate]
-        bx, by = x // rw, y // rh
-        # Coarse pixels: one shade per (material, rate, aligned block), at its first pixel.
-        n_mat = scene.materials.albedo.shape[0]
-        n_rates = len(RATES)
-        (m_s, r_s, by_s, bx_s, p_s), _ = lex_sort(
-            (mat, rate, by, bx, pix), (n_mat - 1, n_rates - 1, h - 1, w - 1, n_pix - 1))
-        live = m_s != BIG
-        start = segment_starts(m_s, r_s, by_s, bx_s) & live
-        anchor_sorted = p_s[first_of_segment_index(start)]
-        # p_s is a permutation: unique indices let the scatters be plain stores.
-        anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted, unique_indices=True)
-        is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start, unique_indices=True)
-        # Waves: coarse pixels of one material and rate, by 8x8 tile of the coarse grid.
-        tiles_w = -(-w // TILE)
-        tile = (by // TILE) * tiles_w + bx // TILE
-        sub = ((by % TILE) * TILE + bx % TILE) // cfg.wave_size
-        big = lambda a: jnp.where(is_anchor, a, BIG)  # noqa: E731
-        n_tiles = tiles_w * -(-h // TILE)
-        (wm, wr, wt, wsub), (work,) = lex_sort(
-            (big(mat), big(rate), big(tile), big(sub)),
-            (n_mat - 1, n_rates - 1, n_tiles - 1, TILE * TILE // cfg.wave_size), (pix,))
-        n_work = jnp.sum(is_anchor, dtype=jnp.int32)
-        waves = jnp.sum(segment_starts(wm, wr, wt, wsub) & (wm != BIG), dtype=jnp.int32)
-
+        plan = plan_coarse_pixels(scene, camera, tri, cfg)
     with jax.named_scope("shade"):
         clip = clip_vertices(scene, camera, cfg)
         ids_flat = ids.reshape(-1)
@@ -266,26 +285,31 @@ def frame(scene, camera, cfg: VisBufferConfig) -> Frame:
             pts = points_at(scene, camera, clip, cfg, jnp.where(live_lanes, t, -1), items)
             return shade(pts, scene)
 
-        out, dc = dispatch(work, n_work, fn, jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
-
+        out, work = dispatch.run(plan.work, fn, jnp.zeros((w * h, 3), jnp.float32), cfg.chunk)
+    covered = tri >= 0
     with jax.named_scope("broadcast"):
-        image = jnp.where(covered.reshape(-1)[:, None], out[anchor], 0.0).reshape(h, w, 3)
+        image = jnp.where(covered.reshape(-1)[:, None], out[plan.anchor], 0.0).reshape(h, w, 3)
         overflow = id_overflow + vis.counts["overflow"]
         image = poison_on_overflow(image, overflow)
+    counts = _counts(vis, plan, work, covered, id_overflow, overflow, cfg)
+    aux = {"ids": ids, "rate": plan.rate.reshape(h, w),
+           "shade_count": plan.is_anchor.astype(jnp.int32).reshape(h, w)}
+    return Frame(image, counts, aux)
 
-    inv = dc["invocations"]
+
+def _counts(vis, plan: ShadePlan, work: dispatch.WorkList, covered, id_overflow, overflow,
+            cfg) -> dict:
+    inv = work.invocations
+    waves, util = count_waves(plan.wave_lanes, cfg.wave_size, inv)
     n_cov = jnp.sum(covered, dtype=jnp.int32)
     id_bytes = 4
     written = n_cov * (id_bytes + 4)  # id + depth
-    read = n_pix * id_bytes + inv * id_bytes  # classification reads every id, shading its own
-    counts = make_counts(
-        shade_invocations=inv, covered_pixels=n_cov, waves=waves,
-        lane_utilization=inv.astype(jnp.float32)
-        / jnp.maximum(waves * cfg.wave_size, 1).astype(jnp.float32),
+    # The classification pass reads every id, shading its own.
+    read = cfg.width * cfg.height * id_bytes + inv * id_bytes
+    return make_counts(
+        shade_invocations=inv, covered_pixels=n_cov, waves=waves, lane_utilization=util,
         bytes_intermediate=written + read, id_overflow=id_overflow,
         overflow=overflow, alpha_invocations=vis.counts["alpha_invocations"])
-    aux = {"ids": ids, "rate": rate.reshape(h, w),
-           "shade_count": is_anchor.astype(jnp.int32).reshape(h, w)}
-    return Frame(image, counts, aux)
+
 
 render = REGISTRY["visbuffer"].render  # the compiled, overflow-checked entry

@@ -36,9 +36,7 @@ def planes(guard: float) -> np.ndarray:
 def _inside_each_plane(points: Array, guard: float) -> Array:
     """bool[..., 6]: d >= 0 for each plane, each distance written out from its two non-zero
     terms. The 4-term sum over ``planes`` rows is a reduction over a tiny axis: XLA CPU hands
-    it to a library call (1.0-1.5 ms of the 640x360 frame on a 2-core CPU) and XLA GPU to a
-    reduction kernel (0.23 ms of the 2.6M-triangle frame on an H100), both measured on
-    2026-11-22. Only signs are used here, and the terms with a zero coefficient are exact
+    it to a library call and XLA GPU to a reduction kernel, both slow. Only signs are used here, and the terms with a zero coefficient are exact
     zeros, so the two forms agree except where a vertex lies within rounding of the guard band,
     100 screens away (the clipper then decides with its own arithmetic, which is unchanged)."""
     x, y, z, w = (points[..., i] for i in range(4))

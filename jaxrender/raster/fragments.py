@@ -15,14 +15,9 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 
-from jaxrender.raster import samples as sample_patterns
-from jaxrender.raster.rasterize import (
-    _check_mesh,
-    _check_size,
-    default_clip_capacity,
-    default_work_capacity,
-    traverse,
-)
+import jaxrender.raster.samples as sample_patterns
+from jaxrender.raster.checks import check_mesh, check_size
+from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.types import Array, pytree_dataclass
 
@@ -60,8 +55,8 @@ def fragments(
     clip_capacity: int | None = None,
 ) -> Fragments:
     """All covered (pixel, triangle, depth) of clip-space triangles; see the module docstring."""
-    width, height = _check_size(width, height)
-    _check_mesh(clip, faces, "clip", 4)
+    width, height = check_size(width, height)
+    check_mesh(clip, faces, "clip", 4)
     (offset,) = sample_patterns.to_fixed(sample_patterns.validate([sample_offset]), SUBPIXEL_BITS)
     cap = int(capacity or default_fragment_capacity(width, height))
     frags = fragments_jit(

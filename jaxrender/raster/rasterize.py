@@ -9,7 +9,6 @@ size, not a limit: work beyond it runs in further iterations of a loop inside th
 from __future__ import annotations
 
 import dataclasses
-import weakref
 from functools import lru_cache, partial
 
 import jax
@@ -17,9 +16,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.compaction import compact_indices
-from jaxrender.raster import samples as sample_patterns
+import jaxrender.raster.samples as sample_patterns
+from jaxrender.raster.checks import check_mesh, check_size
 from jaxrender.raster.clip import MAX_FAN, classify, clip_triangles
-from jaxrender.raster.coverage import EMPTY_KEY, Triangles, depth_key, for_each_chunk
+from jaxrender.raster.coverage import for_each_chunk
+from jaxrender.raster.work_items import EMPTY_KEY, Triangles, depth_key
 from jaxrender.raster.resolve import decode_keys, resolve
 from jaxrender.raster.setup import SUBPIXEL_BITS, SetupFn, guard_band
 from jaxrender.scene.camera import Camera, world_to_clip
@@ -30,23 +31,22 @@ def default_work_capacity(n_tris: int, width: int, height: int) -> int:
     """Chunk size of the pixel work list: two bounding-box pixels per screen pixel plus one
     for every other triangle, rounded up to 2^16. A static chunk costs its full size whatever
     it holds, so it should fit a typical frame's items without much slack; a frame that needs
-    more runs more chunks (measured 2026-11-22: a 1080p terrain needed 4.1-4.2M items for any
-    triangle count from 2.5k to 2.6M)."""
+    more runs more chunks (a 1080p terrain needs about two items per pixel whatever its
+    triangle count)."""
     want = 2 * width * height + n_tris // 2
     return int(min(max(1 << 16, -(-want // (1 << 16)) * (1 << 16)), 1 << 25))
 
 
 # Below this many pixels "auto" keeps the bounding-box traversal on the CPU: the span
-# traversal pays for itself in run time on large frames (640x360 terrain: 56 -> 21 ms) but
-# costs compile time (+1.3 s per rasterizing program on the 2-core CPU, measured 2026-11-22),
-# which dominates small frames (the quickstart at 128x72, the tests).
+# traversal pays for itself in run time on large frames but costs compile time (over a second
+# per rasterizing program on a 2-core CPU), which dominates small frames (the quickstart at
+# 128x72, the tests).
 SPANS_MIN_PIXELS = 1 << 16
 
 # Elsewhere (GPU) "auto" recomputes the setup per work item when there is at least one
-# triangle per this many pixels, and stores it otherwise. Kernel time per frame on an H100 at
-# 1920x1080 (2026-11-23), stored vs recomputed: 2.5k triangles 0.296 vs 0.351 ms, 164k 0.428 vs
-# 0.426, 655k 0.585 vs 0.507, 2.6M 1.370 vs 0.859: per item, recomputing costs more than
-# gathering when many items share a triangle, and saves the setup's writes when few do.
+# triangle per this many pixels, and stores it otherwise: per item, recomputing costs more than
+# gathering when many items share a triangle, and saves the setup's writes when few do (the
+# crossover lies between 164k and 655k triangles at 1920x1080).
 RECOMPUTE_MIN_DENSITY = 16
 
 
@@ -76,8 +76,8 @@ def rasterize_clip(
     ``donate``: the previous result of the same call (same kind and size), for a frame loop
     (``vis = rasterize_clip(..., donate=vis)``). This call's output takes over its device
     memory and it is deleted. On a GPU that keeps every buffer at the same address from frame
-    to frame, so XLA need not update its CUDA graphs before each launch: 0.25 -> 0.19 ms per
-    call at 640x360 on an H100 (2026-11-23).
+    to frame, so XLA need not update its CUDA graphs before each launch, which is a
+    noticeable part of a small frame's time.
     """
     return _rasterize_checked(clip, faces, width, height, True, cull_backfaces, sample_offsets,
                               work_capacity, clip_capacity, donate)
@@ -87,8 +87,8 @@ def rasterize_depth_clip(clip: Array, faces: Array, width: int, height: int,
                          **kwargs) -> DepthBuffer:
     """``rasterize_clip`` without barycentrics: the nearest triangle's id and depth per pixel
     (bit for bit those of the VisBuffer), for a depth pre-pass, a shadow map or an id buffer.
-    Skips the resolve step and two thirds of the output (at 1080p on an H100 the resolve's
-    kernels took 0.07 of 0.29 ms, 2026-11-23)."""
+    Skips the resolve step (about a quarter of a 1080p frame's kernel time on a GPU) and two
+    thirds of the output."""
     return _rasterize_checked(clip, faces, width, height, False, **kwargs)
 
 
@@ -96,10 +96,10 @@ def _rasterize_checked(clip, faces, width, height, barycentrics, cull_backfaces=
                        sample_offsets=None, work_capacity=None, clip_capacity=None, donate=None):
     # Per call only what the arrays can change; the rest is worked out once per setting, so a
     # frame loop's Python stays small beside a sub-millisecond frame.
-    width, height = _check_size(width, height)
+    width, height = check_size(width, height)
     offsets = _fixed_offsets(None if sample_offsets is None else
                              tuple(tuple(float(v) for v in o) for o in sample_offsets))
-    _check_mesh(clip, faces, "clip", 4)
+    check_mesh(clip, faces, "clip", 4)
     n_tris = faces.shape[0]
     static = dict(
         width=width,
@@ -115,11 +115,11 @@ def _rasterize_checked(clip, faces, width, height, barycentrics, cull_backfaces=
         if donate is not None:
             raise ValueError("rasterize: donate is for a call made on its own; inside jax.jit "
                              "XLA places the buffers itself")
-        return _rasterize(*args, **static)
+        return rasterize_traced(*args, **static)
     if donate is None:
-        return _rasterize_program(*args, **static)
+        return rasterize_program(*args, **static)
     _check_donated(donate, barycentrics, len(offsets), width, height)
-    return _rasterize_donating(*args, donate, **static)
+    return rasterize_donating(*args, donate, **static)
 
 
 _default_work_capacity = lru_cache(maxsize=64)(default_work_capacity)
@@ -166,8 +166,8 @@ def rasterize_depth(
 
 
 def _world_clip(positions, faces, camera, width, height):
-    width, height = _check_size(width, height)
-    _check_mesh(positions, faces, "positions", 3)
+    width, height = check_size(width, height)
+    check_mesh(positions, faces, "positions", 3)
     return world_to_clip(jnp.asarray(positions, jnp.float32), camera, width / height)
 
 
@@ -184,24 +184,25 @@ def _rasterize_impl(clip, faces, *, width, height, cull_backfaces, offsets, work
         )
 
 
-# Inside other programs (the pipelines) and in tests.
-_rasterize = jax.jit(_rasterize_impl, static_argnames=_STATIC)
+# The jitted core without input checks, for use inside other programs (the pipelines) and
+# in tests.
+rasterize_traced = jax.jit(_rasterize_impl, static_argnames=_STATIC)
 
 # A call on its own (the entry points with concrete arrays; the benchmarks) compiles with
 # XLA GPU's graph threshold at 1: a run of fewer than 5 kernels (its default) is launched
 # kernel by kernel, and the three after the coverage loop (decode, counts) then cost a launch
-# each. As one CUDA graph a donated 640x360 depth call took 0.183-0.219 ms instead of
-# 0.235-0.252 on an H100 (2026-11-23), with no change at larger sizes. Other backends ignore
+# each. As one CUDA graph a small donated depth call is about a fifth faster, with no change
+# at larger sizes. Other backends ignore
 # the option; jax accepts options on a top-level jit only, hence the separate entries.
 _OPTIONS = {"xla_gpu_graph_min_graph_size": 1}
-_rasterize_program = jax.jit(_rasterize_impl, static_argnames=_STATIC, compiler_options=_OPTIONS)
+rasterize_program = jax.jit(_rasterize_impl, static_argnames=_STATIC, compiler_options=_OPTIONS)
 
 
 # keep_unused: an argument the program does not read is otherwise pruned, and its buffers
 # would be freed instead of becoming the outputs.
 @partial(jax.jit, static_argnames=_STATIC, donate_argnames="donate", keep_unused=True,
          compiler_options=_OPTIONS)
-def _rasterize_donating(clip, faces, donate, **static):
+def rasterize_donating(clip, faces, donate, **static):
     del donate  # only its buffers are wanted: XLA writes the outputs into them
     return _rasterize_impl(clip, faces, **static)
 
@@ -295,27 +296,37 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
         "work_items": items,
         "clipped": n_cross,
         # Summed from a materialised copy of the mask: otherwise XLA GPU fuses this scalar sum
-        # with the triangle setup, which then runs inside the reduction's one thread block
-        # (28 us of a 0.1 ms frame at 640x360 on an H100, 2026-11-23).
+        # with the triangle setup, which then runs inside the reduction's one thread block.
         "dropped_nonfinite": jnp.sum(~jax.lax.optimization_barrier(finite), dtype=jnp.int64),
     }
     return state, counts
 
 
-def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap,
-                   traversal="auto", barycentrics=True) -> VisBuffer | DepthBuffer:
-    def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
+def sample_visibility(clip, faces, width, height, offset, *, cull_backfaces=False,
+                      work_capacity, clip_capacity, traversal="auto", barycentrics=True,
+                      keep=None):
+    """The nearest fragment of every pixel at one sample point: the per-sample core of every
+    rasterizing entry, for use inside a program (no input checks).
+
+    ``offset``: int64[2] (or int32[2]) fixed-point sample offset inside the pixel. ``keep``:
+    an optional ``keep(chunk) -> bool[capacity]`` that discards covered fragments before the
+    depth test (a per-sample alpha test); discarded fragments still count in ``fragments``.
+    Returns (VisBuffer, or DepthBuffer without ``barycentrics``, with empty counts; counts
+    dict of int64: work_items, clipped, dropped_nonfinite, fragments)."""
+    with jax.enable_x64(True):
+        offset = offset.astype(jnp.int64)
         n_pix = width * height
 
         def scatter_min(st, c):
             zb, frags = st
-            pix = jnp.where(c.covered, c.py * width + c.px, n_pix)
+            covered = c.covered if keep is None else c.covered & keep(c)
+            pix = jnp.where(covered, c.py * width + c.px, n_pix)
             zb = zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop")
             return zb, frags + jnp.sum(c.covered, dtype=jnp.int64)
 
         zbuf = jnp.full((n_pix,), EMPTY_KEY, jnp.int64)
         (zbuf, frags), counts = traverse(
-            clip, faces, width, height, cull, offset, capacity, clip_cap,
+            clip, faces, width, height, cull_backfaces, offset, work_capacity, clip_capacity,
             (zbuf, jnp.int64(0)), scatter_min, traversal,
         )
         with jax.named_scope("resolve"):
@@ -326,6 +337,14 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
                 vis = resolve(zbuf, clip, faces, width, height, off_px)
         return vis, dict(counts, fragments=frags)
 
+
+def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap,
+                   traversal="auto", barycentrics=True) -> VisBuffer | DepthBuffer:
+    def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
+        return sample_visibility(clip, faces, width, height, offset, cull_backfaces=cull,
+                                 work_capacity=capacity, clip_capacity=clip_cap,
+                                 traversal=traversal, barycentrics=barycentrics)
+
     offs = jnp.asarray(offsets, jnp.int64)
     if len(offsets) == 1:
         vis, counts = one_sample(offs[0])
@@ -334,61 +353,3 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
         counts = {k: jnp.sum(v) if k in ("fragments", "work_items") else v[0]
                   for k, v in counts.items()}
     return dataclasses.replace(vis, counts=Counts.pack(counts))
-
-
-def _check_size(width, height) -> tuple[int, int]:
-    for name, v in (("width", width), ("height", height)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v <= 0:
-            raise ValueError(f"rasterize: {name} must be a positive integer, got {v!r}")
-    if width * height >= 2**31:
-        raise ValueError(f"rasterize: {width}x{height} has too many pixels (limit 2^31)")
-    return int(width), int(height)
-
-
-def _check_mesh(verts, faces, what: str, dim: int) -> None:
-    """Checks that need only shapes and dtypes; values are checked when they are concrete."""
-    n_verts = np.shape(verts)[0] if np.ndim(verts) else 0
-    _check_shapes(np.shape(verts), _dtype(verts), np.shape(faces), _dtype(faces), what, dim)
-    if not isinstance(faces, jax.core.Tracer):
-        lo, hi = _index_range(faces)
-        if lo < 0 or hi >= n_verts:
-            bad = lo if lo < 0 else hi
-            raise ValueError(f"rasterize: face index {bad} out of range for {n_verts} vertices")
-
-
-def _dtype(x) -> np.dtype:
-    return np.dtype(x.dtype if hasattr(x, "dtype") else np.asarray(x).dtype)
-
-
-@lru_cache(maxsize=256)
-def _check_shapes(vshape, vdtype, fshape, fdtype, what: str, dim: int) -> None:
-    if len(vshape) != 2 or vshape[1] != dim:
-        raise ValueError(f"rasterize: {what} must have shape (V, {dim}), got {vshape}")
-    if len(fshape) != 2 or fshape[1] != 3:
-        raise ValueError(f"rasterize: faces must have shape (T, 3), got {fshape}")
-    if vshape[0] == 0 or fshape[0] == 0:
-        raise ValueError(f"rasterize: empty mesh ({vshape[0]} vertices, {fshape[0]} faces)")
-    if not np.issubdtype(fdtype, np.integer):
-        raise TypeError(f"rasterize: faces must be integers, got dtype {fdtype}")
-    if not np.issubdtype(vdtype, np.floating):
-        raise TypeError(f"rasterize: {what} must be floating point")
-    if fshape[0] >= 2**31 - 1:
-        raise ValueError("rasterize: too many triangles for 32-bit ids")
-
-
-_INDEX_RANGES: dict[int, tuple[weakref.ref, int, int]] = {}
-
-
-def _index_range(faces) -> tuple[int, int]:
-    """(min, max) of a concrete index array, remembered for device arrays (immutable) while
-    they live: a frame loop passing the same faces would otherwise copy them to the host every
-    frame to check them."""
-    hit = _INDEX_RANGES.get(id(faces))
-    if hit is not None and hit[0]() is faces:
-        return hit[1], hit[2]
-    f = np.asarray(faces)
-    lo, hi = int(f.min()), int(f.max())
-    if isinstance(faces, jax.Array):
-        key = id(faces)
-        _INDEX_RANGES[key] = (weakref.ref(faces, lambda _: _INDEX_RANGES.pop(key, None)), lo, hi)
-    return lo, hi

@@ -13,7 +13,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.raster.coverage import EMPTY_KEY
+from jaxrender.raster.work_items import EMPTY_KEY
 from jaxrender.types import Array, VisBuffer
 
 
@@ -98,8 +98,7 @@ def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int,
 
     The adjugate is computed once per triangle and its nine entries gathered per pixel as
     separate columns: on XLA CPU the per-pixel gather of 3 x 4 vertex floats through ``faces``
-    was a materialised slice gather costing 2.2-3.5 ms of the 640x360 frame (2-core CPU,
-    2026-11-22); the arithmetic is the same as ``barycentrics_at``'s."""
+    is a materialised slice gather, slow; the arithmetic is the same as ``barycentrics_at``'s."""
     covered = tri >= 0
     x = jnp.broadcast_to(jnp.arange(width, dtype=jnp.float32)[None, :] + offset_px[0],
                          (height, width))
@@ -110,3 +109,41 @@ def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int,
     bary, ddx, ddy, _ = _from_rows(rows, x, y, width, height)
     c = covered[..., None]
     return jnp.where(c, bary, 0.0), jnp.where(c, ddx, 0.0), jnp.where(c, ddy, 0.0)
+
+
+def pair_barycentrics(clip: Array, faces: Array, tri: Array, px: Array, py: Array,
+                      width: int, height: int, offset=(0.5, 0.5)):
+    """Perspective-correct barycentrics of triangle ``tri`` int32[N] at the sample point
+    (px + ox, py + oy) of pixels px, py int32[N], and their d/dx, d/dy (per pixel right / down).
+
+    The same homogeneous (Olano-Greer) formulation as ``barycentrics_at``, for a flat list of
+    (triangle, pixel) pairs whose point may lie outside the triangle (quad helper lanes, chunk
+    neighbours): there the barycentrics are extrapolated, unclamped, so the rows are scaled to
+    a unit maximum first to keep the products in range. Returns three float32[N, 3].
+    """
+    verts = clip[faces[jnp.maximum(tri, 0)]]  # [N, 3, 4]
+    c = jnp.stack([verts[..., 0], verts[..., 1], verts[..., 3]], axis=-1)  # [N, 3, 3]
+    rows = jnp.stack([jnp.cross(c[:, 1], c[:, 2]), jnp.cross(c[:, 2], c[:, 0]),
+                      jnp.cross(c[:, 0], c[:, 1])], axis=-2)
+    scale = jnp.max(jnp.abs(rows), axis=(-2, -1), keepdims=True)
+    rows = rows / jnp.where(scale > 0, scale, 1.0)
+    u = (px.astype(jnp.float32) + offset[0]) * (2.0 / width) - 1.0
+    v = 1.0 - (py.astype(jnp.float32) + offset[1]) * (2.0 / height)
+    e = rows[..., 0] * u[:, None] + rows[..., 1] * v[:, None] + rows[..., 2]
+    s = jnp.sum(e, axis=-1, keepdims=True)
+    ok = (tri >= 0)[:, None] & (s != 0.0)
+    s = jnp.where(ok, s, 1.0)
+    b = e / s
+    db_du = (rows[..., 0] - b * jnp.sum(rows[..., 0], axis=-1, keepdims=True)) / s
+    db_dv = (rows[..., 1] - b * jnp.sum(rows[..., 1], axis=-1, keepdims=True)) / s
+    inside = jnp.all(b >= 0.0, axis=-1, keepdims=True)
+    # Inside the triangle clamp a rounding error away, as resolve does; outside extrapolate.
+    bc = jnp.clip(b, 0.0, 1.0)
+    bc = bc / jnp.maximum(jnp.sum(bc, axis=-1, keepdims=True), 1e-30)
+    b = jnp.where(inside, bc, b)
+    zero = jnp.zeros_like(b)
+    third = jnp.full_like(b, 1.0 / 3.0)
+    bary = jnp.where(ok, b, jnp.where((tri >= 0)[:, None], third, zero))
+    ddx = jnp.where(ok, db_du * (2.0 / width), zero)
+    ddy = jnp.where(ok, db_dv * (-2.0 / height), zero)
+    return bary, ddx, ddy

@@ -20,7 +20,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.raster.coverage import WorkChunk, owners, window_depth
+from jaxrender.raster.work_items import WorkChunk, owners, window_depth
 from jaxrender.raster.setup import SUBPIXEL, TriSetup
 from jaxrender.types import Array
 
@@ -36,8 +36,8 @@ def span_capacities(capacity: int) -> tuple[int, int]:
 
 
 def _cumsum(x: Array) -> Array:
-    # jnp.cumsum is a reduce-window on XLA CPU: 6.2 ms for 524k int32 where the associative
-    # scan took 1.7 ms (2-core CPU, 2026-11-22).
+    # jnp.cumsum is a reduce-window on XLA CPU, several times slower than the associative
+    # scan.
     return jax.lax.associative_scan(jnp.add, x)
 
 
@@ -98,7 +98,7 @@ def _pixels(row: dict, incl: Array, base: Array, capacity: int) -> WorkChunk:
 def _computed_once(make, true: Array):
     """``make()``, computed into buffers of its own. XLA CPU otherwise fuses the row-bound
     arithmetic into every level of the scan below and every gather of the pixel stage, and
-    re-evaluates it there (measured 2026-11-22, 2-core CPU, 640x360 terrain: 3.5 ms of 17).
+    re-evaluates it there (a fifth of the frame on a 2-core CPU).
     ``optimization_barrier`` does not stop it (the CPU pipeline removes barriers before
     fusion); a conditional's results are always buffers. ``true`` is a traced predicate that
     holds, so that the conditional is not folded away; computing inside the branch writes the

@@ -208,8 +208,8 @@ def many_small(*, n_triangles: int = 20_000, size: float = 4.0, point_lights: in
     """A dune surface of n_triangles tiny triangles for scale (large: n_triangles=1_048_576).
 
     At the large setting the triangles are sub-pixel at 1920x1080 from the default camera.
-    ``point_lights`` adds that many coloured point lights in a ring above the dunes (issue 11's
-    target scene is n_triangles=100000, point_lights=4)."""
+    ``point_lights`` adds that many coloured point lights in a ring above the dunes (the
+    performance studies' target scene is n_triangles=100000, point_lights=4)."""
     q = max(int(np.sqrt(n_triangles / 2)), 1)
     nx, nz = q, max(int(np.ceil(n_triangles / (2 * q))), 1)
     plane = grid_plane((size, size * nz / nx), (nx, nz))

@@ -161,22 +161,48 @@ def _rgb(v):
 
 
 def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
+    """The scene of a TOML file (see the module docstring); ``effects`` overrides the file's
+    flags. Raises SceneConfigError naming the file and the key."""
     path = Path(path)
+    data = _read(path)
+    _check_table(path, "", data, TOP, required=("camera", "meshes"))
+    camera = _camera(path, data)
+    materials, textures, by_name = _materials(path, data)
+    parts = _meshes(path, data, materials, textures, by_name)
+    directional, point, ambient = _lights(path, data)
+    eff = _effects(path, data)
+    eff.update(effects or {})
     try:
-        data = tomllib.loads(path.read_text())
+        return build_scene(parts, materials, textures, make_lights(directional, point, ambient),
+                           camera, name=data.get("name", path.stem),
+                           description=data.get("description", ""),
+                           shadows=data.get("shadows", False), effects=eff,
+                           texture_resolution=data.get("texture_resolution"))
+    except (ValueError, KeyError) as e:
+        raise SceneConfigError(path, "<scene>", str(e)) from None
+
+
+def _read(path: Path) -> dict:
+    try:
+        return tomllib.loads(path.read_text())
     except FileNotFoundError:
         raise SceneConfigError(path, "<file>", "scene file not found") from None
     except tomllib.TOMLDecodeError as e:
         raise SceneConfigError(path, "<syntax>", f"not valid TOML: {e}") from None
 
-    _check_table(path, "", data, TOP, required=("camera", "meshes"))
+
+def _camera(path: Path, data: dict):
     _check_table(path, "camera", data["camera"], CAMERA, required=("eye", "target"))
     cam_kw = {k: data["camera"][k] for k in ("up", "fov_y_deg", "near", "far") if k in data["camera"]}
     try:
-        camera = look_at(data["camera"]["eye"], data["camera"]["target"], **cam_kw)
+        return look_at(data["camera"]["eye"], data["camera"]["target"], **cam_kw)
     except ValueError as e:
         raise SceneConfigError(path, "camera", str(e)) from None
 
+
+def _materials(path: Path, data: dict) -> tuple[list, list, dict]:
+    """(materials, texture images, material index by name); each image file is read once per
+    colour space."""
     materials, textures, by_name = [], [], {}
     image_index: dict[tuple, int] = {}
 
@@ -184,6 +210,7 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
         f = _file(path, key, name)
         if (f, srgb) not in image_index:
             import imageio.v3 as iio
+
             try:
                 img = iio.imread(f)
             except Exception as e:  # noqa: BLE001 - any decoder failure names the key
@@ -207,7 +234,12 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
             kw["normal_map"] = image(f"{pre}.normal_map", kw["normal_map"], srgb=False)
         by_name[m["name"]] = len(materials)
         materials.append(Material(**kw))
+    return materials, textures, by_name
 
+
+def _meshes(path: Path, data: dict, materials: list, textures: list, by_name: dict) -> list:
+    """The mesh parts, transformed; a file's own materials and textures are appended to
+    ``materials`` and ``textures``."""
     parts = []
     meshes = _array_of_tables(path, data, "meshes")
     if not meshes:
@@ -243,7 +275,12 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
             if "velocity" in m:
                 p.velocity = np.asarray(m["velocity"], np.float64)
             parts.append(p)
+    return parts
 
+
+def _lights(path: Path, data: dict) -> tuple[list, list, np.ndarray]:
+    """(directional (direction, irradiance) pairs, point (position, intensity) pairs, ambient
+    radiance RGB)."""
     directional, point, ambient = [], [], np.zeros(3)
     for i, lt in enumerate(_array_of_tables(path, data, "lights")):
         pre = f"lights[{i}]"
@@ -264,7 +301,10 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
             point.append((lt["position"], lt["intensity"]))
         else:
             ambient = ambient + np.asarray(_rgb(lt["radiance"]))
+    return directional, point, ambient
 
+
+def _effects(path: Path, data: dict) -> dict:
     eff = dict(data.get("effects", {}))
     _check_table(path, "effects", eff, EFFECTS)
     if "brdfs" in eff:
@@ -272,15 +312,7 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
         if bad:
             raise SceneConfigError(path, "effects.brdfs", f"unknown BRDF {bad[0]!r}")
         eff["brdfs"] = tuple(BRDF_NAMES[b] for b in eff["brdfs"])
-    eff.update(effects or {})
-    try:
-        return build_scene(parts, materials, textures, make_lights(directional, point, ambient),
-                           camera, name=data.get("name", path.stem),
-                           description=data.get("description", ""),
-                           shadows=data.get("shadows", False), effects=eff,
-                           texture_resolution=data.get("texture_resolution"))
-    except (ValueError, KeyError) as e:
-        raise SceneConfigError(path, "<scene>", str(e)) from None
+    return eff
 
 
 def _primitive(path, pre, m):

@@ -11,6 +11,7 @@ from jaxrender import catalog
 from jaxrender.scene.builtin import BUILTINS, builtin_scene
 from jaxrender.scene.camera import look_at
 from jaxrender.scene.config import load_scene_toml
+from jaxrender.scene.hard_cases import HARD_SCENES
 from jaxrender.scene.lights import make_lights
 from jaxrender.scene.mesh_io import load_mesh_file
 from jaxrender.scene.scene import Scene, build_scene, with_effects
@@ -20,15 +21,13 @@ MESH_SUFFIXES = {".obj", ".ply", ".glb", ".gltf", ".stl", ".off"}
 
 
 def load_scene(name_or_path: str | Path, *, effects: dict | None = None,
-               shadow_map: bool = True, **size_params) -> Scene:
+               **size_params) -> Scene:
     """Load a scene. ``effects`` overrides flags; ``size_params`` go to a built-in builder.
 
-    When the scene's effects ask for shadows and ``shadow_map`` is True the shadow map is
-    rendered here (``jaxrender.shading.with_shadow_map``), so ``shade`` can use it at once.
+    Pure description: nothing is rendered here. A scene whose effects ask for shadows has no
+    shadow map yet; ``jaxrender.shading.load_lit_scene`` loads it with one.
     """
     key = str(name_or_path)
-    from jaxrender.scene.hard_cases import HARD_SCENES  # the hard-case catalogue (issue 10)
-
     if key in BUILTINS or key in HARD_SCENES:
         build = builtin_scene if key in BUILTINS else (lambda k, **kw: HARD_SCENES[k](**kw))
         scene = build(key, **size_params)
@@ -49,10 +48,6 @@ def load_scene(name_or_path: str | Path, *, effects: dict | None = None,
             raise FileNotFoundError(
                 f"load_scene: {key!r} is neither a built-in scene ({', '.join(BUILTINS)}) "
                 f"nor an existing file nor a scene in {CONFIG_DIR}")
-    if scene.effects.shadows and shadow_map:
-        from jaxrender.shading.shadow import with_shadow_map
-
-        scene = with_shadow_map(scene)
     return scene
 
 

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 
 from jaxrender.scene.effects import BLINN_PHONG, GGX, PROC_STRIPES, Effects
 from jaxrender.scene.scene import Scene
-from jaxrender.shading import brdf
+import jaxrender.shading.brdf as brdf
 from jaxrender.shading.shadow import shadow_factor
 from jaxrender.shading.texture import sample
 from jaxrender.shading.vec import cross, dot, safe_normalize

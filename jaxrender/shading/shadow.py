@@ -9,6 +9,7 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 
+from jaxrender.raster.rasterize import rasterize_depth_clip
 from jaxrender.scene.scene import Scene, ShadowMap
 from jaxrender.shading.vec import cross, safe_normalize
 from jaxrender.types import Array
@@ -37,10 +38,8 @@ def _light_space(points: Array, sm_origin, basis, half) -> Array:
 @partial(jax.jit, static_argnames="size")
 @jax.named_scope("shadow_pass")
 def render_shadow_map(scene: Scene, size: int) -> ShadowMap:
-    """One compiled program (light frame, transform, raster): done op by op it compiled ~57
-    small programs besides the rasterizer's (12 s of the room scene's load, 2026-11-23)."""
-    from jaxrender.raster import rasterize_depth_clip
-
+    """One compiled program (light frame, transform, raster): done op by op it compiles dozens
+    of small programs besides the rasterizer's, seconds of a scene's load."""
     if scene.lights.dir_to_light.shape[0] == 0:
         raise ValueError(f"scene {scene.name!r}: shadows need a directional light")
     origin, basis, half = light_frame(scene)

@@ -18,6 +18,7 @@ from jaxrender.pipelines import registry
 from jaxrender.scene.builtin import BUILTINS
 from jaxrender.scene.camera_path import PATH_TYPES
 from jaxrender.scene.hard_cases import HARD_SCENES
+from jaxrender.shading import load_lit_scene
 from jaxrender.errors import Unavailable, UserError
 
 # ---------------------------------------------------------------- pipelines
@@ -64,7 +65,7 @@ def scene_params(name: str) -> dict | None:
 def load_scene(source: str, params: dict) -> Any:
     """``source`` is a built-in name or a path to a scene TOML file."""
     try:
-        return scenes.load_scene(source, **params)
+        return load_lit_scene(source, **params)
     except (FileNotFoundError, TypeError, ValueError) as e:  # ValueError: a bad scene file
         raise UserError(f"scene {source!r}: {e}") from None
 

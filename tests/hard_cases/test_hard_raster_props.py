@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from jaxrender.raster import fragments, rasterize_clip
 from jaxrender.raster.numpy_reference import rasterize_reference
-from jaxrender.raster.test_meshes import grid_mesh
+from jaxrender.scene.mesh import grid_mesh
 
 W, H = 24, 16
 N_VERTS, N_FACES = 256, 128

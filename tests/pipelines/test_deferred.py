@@ -4,7 +4,7 @@ import numpy as np
 from fdv_scenes import H, W, make_scene, rect_part
 
 from jaxrender.pipelines import COUNT_KEYS, get_pipeline, make_config
-from jaxrender.pipelines.deferred import DEPTH_BYTES, GBUFFER_CHANNELS
+from jaxrender.pipelines.gbuffer import DEPTH_BYTES, GBUFFER_CHANNELS
 
 _ATOL = 1e-5  # float32 shading of identical points; only summation order may differ
 

@@ -17,7 +17,8 @@ import pytest
 from jaxrender.metrics import psnr, temporal_error
 from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.pipelines import object_space as osp
-from jaxrender.pipelines.os_sheet import LANES, build_sheet, raster_st
+from jaxrender.pipelines.os_sheet import LANES, build_sheet
+from jaxrender.pipelines.os_texels import raster_st
 from jaxrender.raster import rasterize_clip
 from jaxrender.scene import MeshPart, camera_path, look_at
 from jaxrender.scene.builtin import stripes

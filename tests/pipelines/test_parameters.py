@@ -34,8 +34,8 @@ import pytest
 
 from jaxrender.pipelines import PipelineOverflow, get_pipeline, list_pipelines, make_config
 from jaxrender.pipelines import program
-from jaxrender.scene import load_scene
 from jaxrender.scene.camera_path import pan
+from jaxrender.shading import load_lit_scene
 
 W, H = 24, 16
 FRAMES = 3  # a pan of this many frames for the stateful pipelines (history, store)
@@ -220,7 +220,7 @@ def _fields(pipe) -> set[str]:
 @functools.lru_cache(maxsize=None)
 def _scene(key: str):
     name, params = SCENES[key]
-    return load_scene(name, **params)
+    return load_lit_scene(name, **params)
 
 
 @functools.lru_cache(maxsize=None)

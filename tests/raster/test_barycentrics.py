@@ -5,7 +5,7 @@ import numpy as np
 
 from jaxrender.raster import rasterize
 from jaxrender.raster.resolve import barycentrics
-from jaxrender.raster.test_meshes import uv_sphere
+from jaxrender.scene.mesh import closed_uv_sphere
 from jaxrender.scene.camera import look_at, world_to_clip
 from tests.raster.conftest import pad
 
@@ -13,7 +13,7 @@ W, H = 64, 48
 
 
 def _scene(rng):
-    v, f = uv_sphere(10, 20, radius=1.0)
+    v, f = closed_uv_sphere(10, 20, radius=1.0)
     v = v * rng.uniform(0.7, 1.3, 3).astype(np.float32)
     eye = rng.uniform(-1, 1, 3) + np.array([0, 0, 3.5])
     cam = look_at(eye, rng.uniform(-0.2, 0.2, 3), fov_y_deg=rng.uniform(35, 70), near=0.5, far=20)

@@ -1,4 +1,4 @@
-"""``coverage.owners`` (each slot's first item marked, then a running maximum) against
+"""``work_items.owners`` (each slot's first item marked, then a running maximum) against
 np.searchsorted, on runs with many empty slots."""
 
 import jax
@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrender.raster import coverage
+from jaxrender.raster import work_items
 
 
 def _expected(count, base, capacity):
@@ -23,7 +23,7 @@ def test_owners_match_searchsorted(rng, n_slots):
     count = rng.integers(0, 10, n_slots) * (rng.random(n_slots) < 0.6)
     count[rng.integers(0, n_slots, max(1, n_slots // 100))] += rng.integers(50, 300)
     total, capacity = int(count.sum()), 64
-    fn = jax.jit(lambda c, i, b: coverage.owners(c, i, b, capacity))
+    fn = jax.jit(lambda c, i, b: work_items.owners(c, i, b, capacity))
     with jax.enable_x64(True):
         incl = jnp.cumsum(jnp.asarray(count, jnp.int64))
         for base in sorted({0, 1, total // 3, max(total - capacity // 2, 0), total}):

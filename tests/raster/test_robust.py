@@ -7,7 +7,7 @@ import pytest
 
 from jaxrender.raster import fragments, rasterize, rasterize_clip
 from jaxrender.raster.numpy_reference import rasterize_reference
-from jaxrender.raster.test_meshes import grid_mesh, uv_sphere
+from jaxrender.scene.mesh import closed_uv_sphere, grid_mesh
 from jaxrender.scene.camera import look_at, world_to_clip
 from tests.raster.conftest import gl_clip, pad
 
@@ -39,7 +39,7 @@ def test_jittered_grid_covers_every_pixel_exactly_once(rng):
 
 
 def test_closed_sphere_covers_each_pixel_twice_and_once_when_culled():
-    v, f = uv_sphere(10, 20, radius=1.0)
+    v, f = closed_uv_sphere(10, 20, radius=1.0)
     cam = look_at((0.3, 0.2, 3.0), (0, 0, 0), fov_y_deg=50, near=0.1, far=10)
     clip = np.asarray(world_to_clip(jnp.asarray(v), cam, W / H))
     clip, f = pad(clip, f)
@@ -92,7 +92,7 @@ def test_half_behind_the_eye_covers_its_visible_part():
 
 
 def test_world_coordinates_far_from_origin_match_near_origin():
-    v, f = uv_sphere(10, 16, radius=1.0)
+    v, f = closed_uv_sphere(10, 16, radius=1.0)
     offset = np.array([1e5, -1e5, 1e5], np.float32)
     cam0 = look_at((0.2, 0.1, 3.0), (0, 0, 0), fov_y_deg=50, near=0.1, far=10)
     cam1 = look_at(offset + (0.2, 0.1, 3.0), offset, fov_y_deg=50, near=0.1, far=10)
@@ -179,12 +179,12 @@ def test_fragment_overflow_is_an_error_naming_the_capacity():
 
 
 def test_moving_the_camera_does_not_recompile():
-    from jaxrender.raster.rasterize import _rasterize, _rasterize_program
+    from jaxrender.raster.rasterize import rasterize_program, rasterize_traced
 
     def compiled():
-        return _rasterize._cache_size() + _rasterize_program._cache_size()
+        return rasterize_traced._cache_size() + rasterize_program._cache_size()
 
-    v, f = pad(*uv_sphere(8, 12))
+    v, f = pad(*closed_uv_sphere(8, 12))
     jax.block_until_ready(rasterize(v, f, look_at((0, 0.2, 3.0), (0, 0, 0), fov_y_deg=40,
                                                   near=0.1, far=10), W, H))
     before = compiled()
@@ -197,7 +197,7 @@ def test_moving_the_camera_does_not_recompile():
 def test_index_check_is_remembered_per_array_not_per_shape():
     """The faces' index range is remembered per device array; another array of the same shape
     with a bad index must still be refused."""
-    v, f = pad(*uv_sphere(8, 12))
+    v, f = pad(*closed_uv_sphere(8, 12))
     clip = np.concatenate([v, np.ones((len(v), 1), np.float32)], 1)
     good = jnp.asarray(f)
     rasterize_clip(clip, good, W, H)

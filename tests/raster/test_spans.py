@@ -8,7 +8,7 @@ import pytest
 
 from jaxrender.raster import samples
 from jaxrender.raster.fragments import fragments_jit
-from jaxrender.raster.rasterize import _rasterize
+from jaxrender.raster.rasterize import rasterize_traced
 from jaxrender.raster.samples import to_fixed
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from tests.raster.conftest import gl_clip, pad
@@ -18,7 +18,7 @@ FIELDS = ("tri_id", "depth", "bary", "dbary_dx", "dbary_dy")
 
 
 def _vis(clip, faces, traversal, *, cull=False, offsets=samples.CENTER, work=1 << 16, clip_cap=64):
-    return _rasterize(
+    return rasterize_traced(
         jnp.asarray(clip), jnp.asarray(faces), width=W, height=H, cull_backfaces=cull,
         offsets=to_fixed(offsets, SUBPIXEL_BITS), work_capacity=work, clip_capacity=clip_cap,
         traversal=traversal,
@@ -81,7 +81,8 @@ def test_peeled_first_chunk_changes_nothing(rng, traversal):
     # order, must run, whether the items fill many chunks, one, or none at all.
     import jax
 
-    from jaxrender.raster.coverage import Triangles, depth_key, for_each_chunk
+    from jaxrender.raster.coverage import for_each_chunk
+    from jaxrender.raster.work_items import Triangles, depth_key
     from jaxrender.raster.setup import SetupFn
 
     clip, faces = _random_scene(rng, "mixed_sizes")
@@ -117,3 +118,31 @@ def test_peeled_first_chunk_changes_nothing(rng, traversal):
             np.testing.assert_array_equal(b[0], a[0], err_msg=f"{what}: z-buffer")
             assert b[1:] == a[1:], (what, a[1:], b[1:])
     assert a[2] == 60  # the last case has no items (the peeled chunk was all masked): 10+20+30
+
+
+def test_sample_visibility_is_the_rasterizers_per_sample_core(rng):
+    """The public per-sample entry gives the rasterizer's VisBuffer; its ``keep`` filter
+    discards fragments before the depth test (what lies behind them shows)."""
+    import jax
+
+    from jaxrender.raster.rasterize import sample_visibility
+
+    clip, faces = _random_scene(rng, "mixed_sizes")
+    (offset,) = to_fixed(samples.CENTER, SUBPIXEL_BITS)
+    ref = _vis(clip, faces, "bbox")
+
+    @jax.jit
+    def run(c, f):
+        keep_odd = lambda chunk: chunk.tri % 2 == 1  # noqa: E731
+        args = (c, f, W, H, jnp.asarray(offset))
+        kw = dict(work_capacity=1 << 16, clip_capacity=64, traversal="bbox")
+        return sample_visibility(*args, **kw), sample_visibility(*args, keep=keep_odd, **kw)
+
+    (vis, counts), (odd, odd_counts) = run(jnp.asarray(clip), jnp.asarray(faces))
+    for name in FIELDS:
+        np.testing.assert_array_equal(np.asarray(getattr(vis, name)),
+                                      np.asarray(getattr(ref, name)), err_msg=name)
+    assert int(counts["fragments"]) == int(ref.counts["fragments"])
+    tri = np.asarray(odd.tri_id)
+    assert np.all((tri == -1) | (tri % 2 == 1)) and np.any(tri >= 0)
+    assert int(odd_counts["fragments"]) == int(counts["fragments"])  # counted before the test

@@ -18,7 +18,7 @@ def test_every_builtin_loads():
     assert [n for n, _ in listed] == NAMES
     for name, desc in listed:
         assert desc and "\n" not in desc, name
-        s = load_scene(name, shadow_map=False)
+        s = load_scene(name)
         t, v = s.num_triangles, s.num_vertices
         assert s.faces.shape == (t, 3) and s.faces.dtype == jnp.int32, name
         assert int(s.faces.min()) >= 0 and int(s.faces.max()) < v, name
@@ -46,7 +46,7 @@ def test_many_small_large_setting_reaches_a_million():
 
 def test_effects_defaults_and_overrides():
     assert load_scene("stripes").effects.procedural
-    room = load_scene("room", shadow_map=False)
+    room = load_scene("room")
     e = room.effects
     assert e.textures and e.normal_map and e.specular and e.shadows and e.emissive
     assert room.shadow is None

@@ -36,9 +36,9 @@ def test_bundled_scene_files_load():
     files = sorted(CONFIG_DIR.glob("*.toml"))
     assert files, f"no scene files in {CONFIG_DIR}"
     for f in files:
-        s = load_scene(f, shadow_map=False)
+        s = load_scene(f)
         assert s.num_triangles > 0 and np.all(np.isfinite(np.asarray(s.positions))), f
-    s = load_scene("courtyard", shadow_map=False)
+    s = load_scene("courtyard")
     assert s.effects.shadows and s.effects.procedural and s.effects.specular
     assert s.lights.point_position.shape == (1, 3)
 
@@ -97,11 +97,11 @@ def test_mesh_files_load_with_uvs_and_textures(tmp_path, suffix):
     mesh.export(path)
     toml = GOOD.replace('primitive = "plane"\nsize = [2, 2]\nmaterial = "a"',
                         f'file = "quad.{suffix}"\ntranslate = [1, 0, 0]\nscale = 2.0')
-    for s in (load_scene(_write(tmp_path, toml), shadow_map=False), load_scene(path)):
+    for s in (load_scene(_write(tmp_path, toml)), load_scene(path)):
         assert s.num_triangles == 2, suffix
         pos = np.asarray(s.positions)
         assert np.all(np.isfinite(np.asarray(s.normals)))
-    s = load_scene(_write(tmp_path, toml), shadow_map=False)
+    s = load_scene(_write(tmp_path, toml))
     np.testing.assert_allclose(np.asarray(s.bounds), [[1, 0, 0], [3, 2, 0]], atol=1e-6,
                                err_msg=f"{suffix}: transform applied")
     if suffix in ("obj", "glb"):  # PLY keeps no texture image

@@ -10,7 +10,7 @@ from shading_helpers import RES, PAD_T, PAD_V, flat, padding_part, raster
 
 from jaxrender.scene import Material, build_scene, list_builtin_scenes, load_scene, look_at, make_lights
 from jaxrender.scene.mesh import box, grid_plane, trs_matrix
-from jaxrender.shading import shade, surface_points, with_shadow_map
+from jaxrender.shading import load_lit_scene, shade, surface_points, with_shadow_map
 from jaxrender.shading.texture import lod_isotropic
 
 _TOL = 1e-5
@@ -18,7 +18,7 @@ _TOL = 1e-5
 
 def test_surface_points_interpolate_and_orient():
     rng = np.random.default_rng(0)
-    scene = load_scene("sliver", shadow_map=False)
+    scene = load_scene("sliver")
     cam = look_at((0.3, 0.2, -4.0), (0, 0, 0))  # from behind the wall: normals must flip
     n = 16
     tri = rng.integers(0, 64, n).astype(np.int32)  # the fan (non-degenerate)
@@ -85,7 +85,7 @@ _SMALL = {"many_small": dict(n_triangles=4000), "terrain": dict(res=32),
 
 def test_every_builtin_renders_without_nan():
     for name, _ in list_builtin_scenes():
-        scene = load_scene(name, shadow_map=False, **_SMALL.get(name, {}))
+        scene = load_scene(name, **_SMALL.get(name, {}))
         scene = dataclasses.replace(scene, effects=scene.effects.replace(shadows=False))
         vis = raster(scene.positions, scene.faces, scene.camera)
         img = np.asarray(shade(surface_points(scene, scene.camera, *flat(vis)), scene))
@@ -93,6 +93,14 @@ def test_every_builtin_renders_without_nan():
         covered = np.asarray(vis.tri_id) >= 0
         assert covered.mean() > 0.05, f"{name}: the default camera sees almost nothing"
         assert img.reshape(-1, 3)[covered.reshape(-1)].max() > 1e-3, f"{name}: all black"
+
+
+def test_load_scene_is_pure_and_load_lit_scene_renders_the_shadow_map():
+    small = {"shadow_map_size": RES}
+    assert load_scene("room", effects=small).shadow is None
+    lit = load_lit_scene("room", effects=small)
+    assert lit.effects.shadows and lit.shadow.depth.shape == (RES, RES)
+    assert load_lit_scene("room", effects=dict(small, shadows=False)).shadow is None
 
 
 def test_shadow_map_darkens_the_floor_under_a_box():

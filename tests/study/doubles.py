@@ -138,7 +138,6 @@ def make_cameras(scene, path, width, height):
 def install(monkeypatch, *, metrics: bool = True):
     """Register ``flat`` and ``reference`` (fakes), fake scenes, the ``fakepan`` path and
     (with ``metrics``) NumPy metrics for one test."""
-    registry._load_builtin_pipelines()
     monkeypatch.setitem(registry.REGISTRY, "flat",
                         registry.Pipeline("flat", FlatConfig, registry.FrameStep(render_flat),
                                           description="fake: quantised"))

@@ -1,0 +1,55 @@
+"""Waves: how shading lanes are packed into SIMD waves of ``wave_size`` lanes, counted one way
+for every pipeline.
+
+Each pipeline groups its lanes the way its hardware counterpart launches them: forward packs the
+2x2 quads of one material into waves; deferred and checkerboard run a full-screen compute pass
+over 8x8 tiles, each split into waves of consecutive rows; the visibility buffer packs the coarse
+pixels of one (material, rate, 8x8 tile) into waves; object-space shading launches whole 8x8
+shadel chunks; DACS hands each warp a run of a level's pixels. A group's lanes never share a wave
+with another group's, so the waves are the sum over groups of ceil(lanes / wave_size), and the
+lane utilisation is the invocations over the lanes those waves hold.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from jaxrender.types import Array
+
+TILE = 8  # pixels per side of a compute tile
+
+
+def count_waves(group_lanes: Array, wave_size: int, invocations: Array) -> tuple[Array, Array]:
+    """Waves for int32[G] lanes per group (any shape): sum of ceil(lanes / wave_size). Returns
+    (waves int32, lane utilisation = invocations / (waves * wave_size), float32; 0 without
+    waves)."""
+    ws = int(wave_size)
+    waves = jnp.sum((group_lanes + ws - 1) // ws, dtype=jnp.int32)
+    util = jnp.asarray(invocations).astype(jnp.float32) / jnp.maximum(waves * ws, 1).astype(
+        jnp.float32)
+    return waves, util
+
+
+def tile_rows(active: Array, wave_size: int) -> Array:
+    """Active pixels per wave group of a full-screen pass over 8x8 tiles: each tile splits into
+    64 / wave_size groups of consecutive rows. bool[H, W] -> int32[tiles, groups]."""
+    h, w = active.shape
+    th, tw = -(-h // TILE), -(-w // TILE)
+    pad = jnp.zeros((th * TILE, tw * TILE), bool).at[:h, :w].set(active)
+    groups = TILE * TILE // int(wave_size)
+    per = pad.reshape(th, TILE, tw, TILE).transpose(0, 2, 1, 3).reshape(th * tw, groups, -1)
+    return jnp.sum(per, axis=-1, dtype=jnp.int32)
+
+
+def tile_waves(active: Array, wave_size: int, invocations: Array) -> tuple[Array, Array]:
+    """Waves of a full-screen compute pass over 8x8 tiles (a wave runs if any of its pixels is
+    active): ``count_waves`` of ``tile_rows``. Returns (waves int32, lane utilisation)."""
+    return count_waves(tile_rows(active, wave_size), wave_size, invocations)
+
+
+def segment_lanes(starts: Array, live: Array) -> Array:
+    """Items per segment of a sorted work list (``starts``: bool[N], True at each segment's
+    first item; ``live``: the items that exist): int32[N], segment k's size at index k."""
+    seg = jnp.cumsum(starts, dtype=jnp.int32) - 1
+    n = starts.shape[0]
+    return jnp.zeros((n,), jnp.int32).at[jnp.where(live, seg, n)].add(1, mode="drop")

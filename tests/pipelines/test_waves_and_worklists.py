@@ -1,0 +1,59 @@
+"""The shared work-list dispatch and wave counts: counts read off the work list, waves against
+a plain loop over groups, and the 8x8-tile grouping against its definition."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrender.pipelines import dispatch
+from jaxrender.pipelines.waves import count_waves, segment_lanes, tile_rows, tile_waves
+
+
+def test_worklist_counts_come_from_the_dispatch(rng):
+    active = rng.random(300) < 0.3
+    work = dispatch.WorkList.of(jnp.asarray(active))
+    n = int(active.sum())
+    assert int(work.count) == n
+    np.testing.assert_array_equal(np.asarray(work.items)[:n], np.nonzero(active)[0])
+    out, done = dispatch.run(work, lambda items, live: items.astype(jnp.float32) + 1.0,
+                             jnp.zeros((300,), jnp.float32), 64)
+    want = np.where(active, np.arange(300) + 1.0, 0.0)
+    np.testing.assert_array_equal(np.asarray(out), want)
+    chunks = -(-n // 64)
+    assert (int(done.invocations), int(done.chunks), int(done.lanes)) == (n, chunks, chunks * 64)
+    assert int(done.idle_lanes) == chunks * 64 - n
+    assert done.counts == {"invocations": done.invocations, "lanes": done.lanes,
+                           "chunks": done.chunks}
+
+
+@pytest.mark.parametrize("wave_size", [32, 64])
+def test_count_waves_is_a_ceiling_per_group(rng, wave_size):
+    lanes = rng.integers(0, 200, 17)
+    waves, util = count_waves(jnp.asarray(lanes, jnp.int32), wave_size, jnp.int32(1000))
+    want = sum(-(-int(x) // wave_size) for x in lanes)
+    assert int(waves) == want
+    np.testing.assert_allclose(float(util), 1000 / (want * wave_size), rtol=1e-6)
+    none, zero = count_waves(jnp.zeros((3,), jnp.int32), wave_size, jnp.int32(0))
+    assert int(none) == 0 and float(zero) == 0.0
+
+
+@pytest.mark.parametrize("wave_size", [32, 64])
+def test_tile_waves_count_groups_of_tile_rows(rng, wave_size):
+    h, w = 19, 27
+    active = rng.random((h, w)) < 0.1
+    rows = wave_size // 8  # tile rows per wave
+    want = 0
+    for ty in range(0, h, 8):
+        for tx in range(0, w, 8):
+            for g in range(8 // rows):
+                block = active[ty + g * rows:ty + (g + 1) * rows, tx:tx + 8]
+                want += int(block.any())
+    got, _ = tile_waves(jnp.asarray(active), wave_size, jnp.int32(int(active.sum())))
+    assert int(got) == want
+    assert int(jnp.sum(tile_rows(jnp.asarray(active), wave_size))) == int(active.sum())
+
+
+def test_segment_lanes():
+    starts = jnp.asarray([True, False, True, True, False, False, True])
+    live = jnp.asarray([True, True, True, True, True, False, False])
+    np.testing.assert_array_equal(np.asarray(segment_lanes(starts, live)), [2, 1, 2, 0, 0, 0, 0])
