@@ -198,6 +198,11 @@ class ProcessCompiler:
                 except Exception:
                     continue
                 values[k] = v
+            if jax.default_backend() == "cpu":
+                # An XLA:CPU executable loaded from the persistent cache serializes without
+                # its code ("Function ... not found" when the parent runs it), so CPU workers
+                # always compile; a GPU executable from the cache travels whole.
+                values["jax_compilation_cache_dir"] = None
             self._procs = ProcessPoolExecutor(
                 max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
                 initializer=_init_worker, initargs=(values,))

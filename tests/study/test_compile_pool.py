@@ -9,7 +9,7 @@ import jax
 import numpy as np
 import pytest
 
-from jaxrender.study import backend, compile_pool, programs
+from jaxrender.study import backend, compile_cache, compile_pool, programs
 from tests.study import doubles
 from jaxrender.study.schema import load_study
 
@@ -100,7 +100,17 @@ def test_switch(monkeypatch):
     assert not compile_pool.use_processes(16)
 
 
-def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog):
+@pytest.mark.parametrize("persistent_cache", [False, True], ids=["no-cache", "cache"])
+def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog, persistent_cache):
+    # With the persistent compilation cache on, the thread path fills it first, so a worker
+    # that read it would hand back an executable loaded from it (on XLA:CPU, one that lost its
+    # code on the way: the frames below would not compute).
+    previous = jax.config.values["jax_compilation_cache_dir"]
+    monkeypatch.setenv(compile_cache.ENV_OFF, "1" if persistent_cache else "0")
+    if persistent_cache:
+        compile_cache.enable(tmp_path / "xla")
+    else:
+        jax.config.update("jax_compilation_cache_dir", None)
     monkeypatch.setattr(backend, "load_scene", FakeLoader())
     plan = _plan(tiny_study)
     threads, ref_t = _compile(monkeypatch, "0", plan, tmp_path)
@@ -112,6 +122,7 @@ def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog):
     assert all(c.compile_ms > 0 for c in procs.values())
     _assert_bitwise(_frames(*plan, threads), _frames(*plan, procs))
     _assert_bitwise(ref_t, ref_p)  # the references, rendered by programs from a worker
+    jax.config.update("jax_compilation_cache_dir", previous)
 
 
 def test_unpicklable_falls_back_to_threads(tiny_study, tmp_path, monkeypatch, caplog):
