@@ -3,7 +3,7 @@
     python benchmarks/bench_raster.py --preset cpu      # 640x360 10k, brute force 2.5k
     python benchmarks/bench_raster.py --preset gpu      # + 1920x1080 at 164k, 655k, 2.6M
 
-Scenes are heightfield terrains (jaxrender.raster.test_meshes.terrain) seen from above at an
+Scenes are heightfield terrains (jaxrender.scene.mesh.terrain_mesh) seen from above at an
 angle, so triangle sizes vary across the image. Also times a brute-force rasterizer (every pixel
 tests every triangle) on 2.5k triangles to show the gap, and on a GPU checks that the GPU's
 triangle ids equal the CPU's.

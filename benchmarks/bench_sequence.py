@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
 import statistics
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -92,7 +93,8 @@ def main(argv=None) -> int:
                              "error": f"{type(e).__name__}: {e}"[:160]})
             print(json.dumps(rows[-1]), flush=True)
     print(f"\n{a.resolution}, {a.frames}-frame pan ({a.pixels_per_frame} px/frame), "
-          f"{a.rounds} rounds; {env['device']}, jax {env['jax']}, {env['date']}\n")
+          f"{a.rounds} rounds; {env['device']}, jax {env['jax_version']}, "
+          f"{time.strftime('%Y-%m-%d')}\n")
     print_table(rows, ["scene", "pipeline", "sequence_ms_per_frame", "single_ms", "ratio",
                        "compile_seq_s", "compile_single_s", "error"])
     if a.json:

@@ -200,7 +200,8 @@ def cmd_reference(a) -> int:
     else:
         from jaxrender.study.schema import load_study
 
-        study = load_study(a.study).with_overrides(frames=a.frames, resolution=a.resolution)
+        study = load_study(a.study, configs=a.configs).with_overrides(
+            frames=a.frames, resolution=a.resolution)
         n = references.rebuild(study)
         print(f"rebuilt {n} reference frame(s) in {cache.cache_dir()}")
     return 0
@@ -309,11 +310,13 @@ def _add_bench(sub) -> None:
 
 def _add_reference(sub) -> None:
     s = sub.add_parser("reference", help="manage the reference cache", description=(
-        "The reference cache ($JAXRENDER_CACHE or ~/.cache/jaxrender/reference)."))
+        "The reference cache: $JAXRENDER_CACHE/reference, else "
+        "$XDG_CACHE_HOME/jaxrender/reference (~/.cache/jaxrender/reference)."))
     rsub = s.add_subparsers(dest="action", required=True, parser_class=_Parser)
     r = rsub.add_parser("rebuild", help="re-render the reference frames of a study",
                         description="Delete and re-render the reference frames a study uses.")
-    r.add_argument("study", help="the study TOML file")
+    r.add_argument("study", help="a study TOML file or a bundled study's name")
+    _configs_argument(r)
     r.add_argument("--frames", type=_positive)
     r.add_argument("--resolution", type=_resolution)
     r.set_defaults(fn=cmd_reference)

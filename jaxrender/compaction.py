@@ -1,9 +1,9 @@
 """Stream compaction: the indices of the True entries of a mask, in order, in a fixed-size list.
 
 ``jnp.nonzero(mask, size=n)`` does this with a scatter-add in which every False entry adds to
-the same few addresses; on an H100 that contention cost 5.4 ms for an 8.3M-entry mask
-(2026-11-22, forward pipeline at 1080p). Here each True entry writes its own slot (its rank, a
-prefix sum), so the scatter has unique indices and no contention: O(n) work, two passes.
+the same few addresses, and that contention dominated whole pipelines on a GPU (benchmarks/
+RESULTS.md). Here each True entry writes its own slot (its rank, a prefix sum), so the scatter
+has unique indices and no contention: O(n) work, two passes.
 """
 
 from __future__ import annotations

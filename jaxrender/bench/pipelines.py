@@ -49,7 +49,7 @@ def default_pipeline_specs() -> list[str]:
 
 
 def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repeats: int = 5,
-                   deadline: float | None = None, log=print):
+                   deadline: float | None = None):
     """Yield one row per (scene, pipeline); rows past ``deadline`` (time.monotonic) are skipped."""
     from jaxrender.pipelines import get_pipeline, make_config
     from jaxrender.scene import default_camera

@@ -48,9 +48,6 @@ class WorkChunk:
     depth: Array  # float32 window depth at the sample point (clamped to [0, 1])
 
 
-def total_items(setup: TriSetup) -> Array:
-    return jnp.sum(setup.count)
-
 
 def running_max(x: Array) -> Array:
     """Inclusive running maximum: lax.cummax on a GPU, where it is several times faster than

@@ -12,7 +12,7 @@ serves the whole catalogue; the cases themselves are in ``hard_geometry`` and ``
 The camera is traced, so fov 1 and fov 170 degrees and eyes at 1e7 do not recompile either.
 
 Cases not expressible as scenes: the metric inputs (constant, black, identical, HDR 1e4) are in
-``METRIC_CASES``; the rasterizer's own random-triangle invariants are property tests
+``metric_cases()``; the rasterizer's own random-triangle invariants are property tests
 (tests/hard_cases/test_hard_raster_props.py), and tests/raster/test_robust.py already pins the
 raster-only hard cases (near plane, far coordinates, slivers, ties, non-finite vertices).
 

@@ -38,8 +38,12 @@ def load_scene(name_or_path: str | Path, *, effects: dict | None = None,
             raise TypeError(f"load_scene({key!r}): size parameters {sorted(size_params)} apply to "
                             f"built-in scenes only ({', '.join(BUILTINS)})")
         path = Path(key)
-        if not path.exists() and (CONFIG_DIR / f"{key}.toml").is_file():
-            path = CONFIG_DIR / f"{key}.toml"
+        # A scene file's stem: the nearest local configs/scenes first, then the built-ins,
+        # as a study file finds it.
+        entry = None if path.exists() else catalog.find(
+            "scenes", key, catalog.local_configs(Path.cwd()))
+        if entry is not None:
+            path = entry.path
         if path.suffix.lower() in MESH_SUFFIXES:
             scene = _single_mesh_scene(path, effects)
         elif path.suffix.lower() == ".toml" or path.exists():
@@ -47,7 +51,8 @@ def load_scene(name_or_path: str | Path, *, effects: dict | None = None,
         else:
             raise FileNotFoundError(
                 f"load_scene: {key!r} is neither a built-in scene ({', '.join(BUILTINS)}) "
-                f"nor an existing file nor a scene in {CONFIG_DIR}")
+                f"nor an existing file nor a scene file; scene files: "
+                f"{catalog.available('scenes', catalog.local_configs(Path.cwd()))}")
     return scene
 
 

@@ -23,7 +23,9 @@ import numpy as np
 
 from jaxrender.version import VERSION
 
+# What a reference frame depends on: the rendering packages and the helpers below them.
 _CODE_DIRS = ("raster", "shading", "scene", "pipelines")
+_CODE_FILES = ("types.py", "compaction.py", "sorting.py", "catalog.py")
 
 
 def cache_root() -> Path:
@@ -45,9 +47,9 @@ def code_version() -> str:
     """jaxrender's version and a hash of the sources a reference image depends on."""
     root = Path(__file__).resolve().parents[1]  # the jaxrender package
     h = hashlib.sha256()
-    for d in _CODE_DIRS:
-        for f in sorted((root / d).rglob("*.py")):
-            h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    files = [f for d in _CODE_DIRS for f in sorted((root / d).rglob("*.py"))]
+    for f in files + [root / name for name in _CODE_FILES]:
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
     return f"{VERSION}+{h.hexdigest()[:12]}"
 
 

@@ -260,6 +260,16 @@ def _reference(ck: Checker, raw, resolution) -> ReferenceSpec:
     d = read_table(ck, raw, "reference", ReferenceSpec)
     pipe = _pipeline_type(ck, d["pipeline"], "reference.pipeline")
     params = check_params(ck, "reference.params", pipe, dict(d["params"]), resolution)
+    if d["check_convergence"]:
+        # The check is the reference's own 2k render (its ``convergence`` parameter).
+        fields = {f.name for f in dataclasses.fields(backend.pipeline(pipe).config_cls)}
+        if "convergence" not in fields:
+            ck.fail("reference.check_convergence", f"reference pipeline {pipe!r} has no "
+                    f"'convergence' parameter to check its convergence with")
+        if params.get("convergence") is False:
+            ck.fail("reference.params.convergence", "check_convergence = true needs the "
+                    "reference's convergence render; drop one of the two")
+        params["convergence"] = True
     return ReferenceSpec(pipe, tuple(sorted(params.items())), d["check_convergence"],
                          d["min_margin_db"])
 

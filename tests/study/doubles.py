@@ -48,6 +48,7 @@ class FlatConfig(registry.RenderConfig):
 @dataclass(frozen=True)
 class RefConfig(registry.RenderConfig):
     samples: int = 4
+    convergence: bool = False
 
 
 def _base(scene, camera, w, h):

@@ -139,6 +139,7 @@ def test_convergence_warning(tiny_study, tmp_path, monkeypatch):
 
     p = registry.REGISTRY["reference"]
     monkeypatch.setitem(registry.REGISTRY, "reference", dataclasses.replace(p, step=registry.FrameStep(poor)))
+    tiny_study.write_text(tiny_study.read_text() + "\n[reference]\ncheck_convergence = true\n")
     res, logs = _run(tiny_study, tmp_path / "run", figures=False)
     assert res.warnings and "may not be converged" in res.warnings[0]
     assert any(line.startswith("warning:") for line in logs)

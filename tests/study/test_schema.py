@@ -237,3 +237,19 @@ def test_bundled_study_by_name():
     assert s.name == "quickstart" and s.file.endswith("studies/quickstart.toml"), s.file
     with pytest.raises(UserError, match="bundled studies: .*quickstart"):
         load_study("no_such_study")
+
+
+def test_check_convergence_turns_on_the_reference_convergence_render(tmp_path):
+    base = ('resolution = "24x16"\nscenes = ["spheres"]\n[[pipelines]]\ntype = "deferred"\n'
+            '[reference]\npipeline = "reference"\n')
+    p = tmp_path / "s.toml"
+    p.write_text(base)
+    assert "convergence" not in dict(load_study(p).reference.params)
+    p.write_text(base + "check_convergence = true\n")
+    assert dict(load_study(p).reference.params)["convergence"] is True
+    p.write_text(base + "check_convergence = true\nparams = { convergence = false }\n")
+    with pytest.raises(StudyError, match="reference.params.convergence: check_convergence"):
+        load_study(p)
+    p.write_text(base.replace('"reference"\n', '"deferred"\n') + "check_convergence = true\n")
+    with pytest.raises(StudyError, match="reference.check_convergence: .* no 'convergence'"):
+        load_study(p)
