@@ -26,7 +26,6 @@ STUDY = """
 name = "outside"
 resolution = "16x16"
 metrics = ["psnr"]
-figures = []
 [[scenes]]
 name = "courtyard"
 [[paths]]
@@ -143,8 +142,8 @@ def test_builtin_presets_then_a_local_override(installed, tmp_path):
     bin_dir, env = installed
     (tmp_path / "outside.toml").write_text(STUDY)
     run([bin_dir / "jaxrender", "validate", "outside.toml"], cwd=tmp_path, env=env)
-    run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/outside"],
-        cwd=tmp_path, env=env)
+    run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/outside",
+         "--no-figures"], cwd=tmp_path, env=env)
     resolved = (tmp_path / "runs/outside/study.toml").read_text()
     assert "# preset 'pan_slow': built-in (" in resolved, resolved
     assert "# preset 'dacs_threshold_sweep': built-in (" in resolved, resolved
@@ -156,7 +155,7 @@ def test_builtin_presets_then_a_local_override(installed, tmp_path):
     line = next(ln for ln in listing.splitlines() if "pan_slow" in ln)
     assert str(local.resolve()) in line, f"`jaxrender presets` says: {line}"
     log = run([bin_dir / "jaxrender", "study", "outside.toml", "--out", "runs/local",
-               "--no-progress"], cwd=tmp_path, env=env)
+               "--no-progress", "--no-figures"], cwd=tmp_path, env=env)
     resolved = (tmp_path / "runs/local/study.toml").read_text()
     assert (f"# preset 'pan_slow': {(tmp_path / 'configs').resolve()} ({local.resolve()}, "
             "overrides the built-in)") in resolved, resolved

@@ -2,8 +2,8 @@
 loads the executables it compiled before instead of compiling them again.
 
 Every program is cached, however quick its compile (JAX's default skips those under a second,
-which on a GPU is most of a study's programs). A ``JAX_COMPILATION_CACHE_DIR`` the user set
-wins; ``JAXRENDER_COMPILATION_CACHE=0`` turns the cache off. Compile workers inherit the
+which on a GPU is most of a study's programs). A ``JAX_COMPILATION_CACHE_DIR`` in the
+environment wins; ``JAXRENDER_COMPILATION_CACHE=0`` turns the cache off. Compile workers inherit the
 setting with the rest of the parent's ``jax.config``.
 """
 
@@ -24,7 +24,6 @@ _EVENTS = {"/jax/compilation_cache/cache_hits": "hits",
 _counts = {"hits": 0, "misses": 0}
 _lock = threading.Lock()
 _listening = False
-_ours: str | None = None  # the folder this module set (a user's own setting is left alone)
 
 
 def default_dir() -> Path:
@@ -40,19 +39,15 @@ def _count(event: str, **_) -> None:
 
 def enable(directory: Path | None = None) -> Path | None:
     """Turn the persistent cache on (idempotent); the folder used, or None when it is off."""
-    global _listening, _ours
+    global _listening
     if os.environ.get(ENV_OFF, "").strip().lower() in ("0", "false", "no", "off"):
         return None
-    current = jax.config.values.get("jax_compilation_cache_dir")
-    if current and current != _ours and directory is None:
-        folder = Path(current)
-    else:
-        folder = Path(directory) if directory is not None else default_dir()
-        folder.mkdir(parents=True, exist_ok=True)
-        if str(folder) != current:
-            jax.config.update("jax_compilation_cache_dir", str(folder))
-            compilation_cache.reset_cache()  # JAX opens its cache folder once per process
-        _ours = str(folder)
+    users = os.environ.get("JAX_COMPILATION_CACHE_DIR")
+    folder = Path(directory or users or default_dir())
+    folder.mkdir(parents=True, exist_ok=True)
+    if str(folder) != jax.config.values.get("jax_compilation_cache_dir"):
+        jax.config.update("jax_compilation_cache_dir", str(folder))
+        compilation_cache.reset_cache()  # JAX opens its cache folder once per process
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
     if not _listening:

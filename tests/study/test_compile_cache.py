@@ -17,6 +17,7 @@ def _program(c: float):
 def test_compiled_once_then_loaded(tmp_path, monkeypatch, rng):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
     monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
     folder = compile_cache.enable()
     assert folder == tmp_path / "xla", folder
     c = float(rng.uniform(1.0, 2.0))
@@ -38,6 +39,8 @@ def test_compiled_once_then_loaded(tmp_path, monkeypatch, rng):
 
 def test_follows_jaxrender_cache_and_can_be_turned_off(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "one"))
+    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
     assert compile_cache.enable() == tmp_path / "one" / "xla"
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "two"))
     assert compile_cache.enable() == tmp_path / "two" / "xla"
@@ -49,9 +52,6 @@ def test_follows_jaxrender_cache_and_can_be_turned_off(tmp_path, monkeypatch):
 def test_a_users_own_cache_folder_wins(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "ours"))
     monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
-    previous = jax.config.values["jax_compilation_cache_dir"]
-    try:
-        jax.config.update("jax_compilation_cache_dir", str(tmp_path / "theirs"))
-        assert compile_cache.enable() == tmp_path / "theirs"
-    finally:
-        jax.config.update("jax_compilation_cache_dir", previous)
+    monkeypatch.setenv("JAX_COMPILATION_CACHE_DIR", str(tmp_path / "theirs"))
+    assert compile_cache.enable() == tmp_path / "theirs"
+    assert jax.config.values["jax_compilation_cache_dir"] == str(tmp_path / "theirs")
