@@ -88,9 +88,10 @@ def spatial_mean(x: Array, naxes: int) -> Array:
     return x
 
 
-def broadcast_taps(taps: Array, ndim: int, axis: int) -> Array:
+def broadcast_taps(taps: Array, ndim: int) -> Array:
     """(n,) or (n, C) tap table reshaped so that ``taps[k]`` broadcasts against an array of rank
-    ``ndim`` filtered along ``axis`` (explicit shapes, as strict rank promotion requires)."""
+    ``ndim`` whose last axis holds the C channels (explicit shapes, as strict rank promotion
+    requires); the filtered axis is the slicing's business, not the taps'."""
     n = taps.shape[0]
     if taps.ndim == 1:
         return taps.reshape((n,) + (1,) * ndim)
@@ -134,7 +135,7 @@ def _correlate_slices(x: Array, taps: Array, axis: int) -> Array:
     n = taps.shape[0]
     axis = axis % x.ndim
     length = x.shape[axis] - n + 1
-    t = broadcast_taps(taps.astype(x.dtype), x.ndim, axis)
+    t = broadcast_taps(taps.astype(x.dtype), x.ndim)
     acc = t[0] * jax.lax.slice_in_dim(x, 0, length, axis=axis)
     for k in range(1, n):
         acc = acc + t[k] * jax.lax.slice_in_dim(x, k, k + length, axis=axis)
