@@ -22,7 +22,7 @@ def load_scene(name_or_path: str | Path, **size_params) -> Scene:
 
 def _config(pipeline: str | Pipeline, params: dict):
     pipe = get_pipeline(pipeline) if isinstance(pipeline, str) else pipeline
-    return pipe, make_config(pipe.name, **params)
+    return pipe, make_config(pipe, **params)
 
 
 def render(scene: Scene, camera, pipeline: str | Pipeline = "deferred", **params) -> Frame:

@@ -17,7 +17,7 @@ from typing import Iterable
 PACKAGE_DIR = Path(__file__).resolve().parent
 BUILTIN = "built-in"
 
-# kind -> (folder under a configs root, or the package's studies folder; what one is called)
+# kind (a folder under a configs root; "studies": the package's studies folder) -> what one is called
 KINDS = {
     "paths": "camera path preset",
     "pipelines": "pipeline preset",
@@ -108,12 +108,7 @@ def entries(kind: str, local: Iterable[Path] = ()) -> dict[str, Entry]:
 
 
 def find(kind: str, name: str, local: Iterable[Path] = ()) -> Entry | None:
-    hits = [(folder / f"{name}.toml", source) for folder, source in _folders(kind, list(local))
-            if (folder / f"{name}.toml").is_file()]
-    if not hits:
-        return None
-    (path, source), hides = hits[0], len(hits) > 1 and hits[-1][1] == BUILTIN
-    return Entry(kind, name, path.resolve(), source, hides)
+    return entries(kind, local).get(name)
 
 
 def available(kind: str, local: Iterable[Path] = ()) -> str:

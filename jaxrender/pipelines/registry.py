@@ -150,9 +150,11 @@ def get_pipeline(name: str) -> Pipeline:
         raise KeyError(f"unknown pipeline {name!r}; registered pipelines: {known}") from None
 
 
-def make_config(name: str, **params):
-    """The pipeline's config from keyword parameters; unknown keys raise, naming the key."""
-    cls = get_pipeline(name).config_cls
+def make_config(pipeline: str | Pipeline, **params):
+    """The config of ``pipeline`` (a registered name, or a Pipeline itself) from keyword
+    parameters; unknown keys raise, naming the key."""
+    pipe = get_pipeline(pipeline) if isinstance(pipeline, str) else pipeline
+    name, cls = pipe.name, pipe.config_cls
     fields = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(params) - fields)
     if unknown:
