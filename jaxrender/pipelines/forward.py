@@ -28,7 +28,7 @@ from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
                                             points_at_xy, raster_fragments)
-from jaxrender.pipelines.waves import count_waves
+from jaxrender.pipelines.waves import count_waves, group_sizes
 from jaxrender.shading import alpha_test, shade
 from jaxrender.sorting import lex_sort
 from jaxrender.types import Array, Frame
@@ -63,7 +63,7 @@ class DrawList(NamedTuple):
     """The fragments of every sample in draw order: sorted by (sample, pixel, triangle), empty
     entries last. ``seg`` marks each (sample, pixel)'s first fragment, ``slot`` is the fragment's
     (sample, pixel) (S * P when empty), ``unit`` the fragment that represents its (triangle,
-    pixel) shading unit (under MSAA several samples share one)."""
+    pixel) shading unit (under MSAA several samples share one), ``samples`` the sample count."""
 
     skey: Array
     pixel: Array
@@ -75,6 +75,7 @@ class DrawList(NamedTuple):
     unit: Array
     overflow: Array
     fragments: Array
+    samples: int = 1
 
 
 def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
@@ -96,7 +97,7 @@ def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
     seg = segment_starts(skey, pixel)
     slot = jnp.where(valid, skey * n_pix + pixel, n_s * n_pix)
     unit = _units(tri, pixel, valid, n_s, n_tris, n_pix)
-    return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit, overflow, n_fragments)
+    return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit, overflow, n_fragments, n_s)
 
 
 def _units(tri, pixel, valid, n_s: int, n_tris: int, n_pix: int) -> Array:
@@ -113,6 +114,9 @@ def _units(tri, pixel, valid, n_s: int, n_tris: int, n_pix: int) -> Array:
 
 
 def _any_per_unit(draw: DrawList, flag: Array) -> Array:
+    """bool[F]: the flag of any fragment of each fragment's shading unit (one sample: itself)."""
+    if draw.samples == 1:
+        return flag
     n_frag = draw.tri.shape[0]
     return jnp.zeros((n_frag,), jnp.int32).at[draw.unit].max(flag.astype(jnp.int32)) > 0
 
@@ -145,7 +149,7 @@ def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
         shaded = draw.valid & (draw.depth == z_final)  # GL_EQUAL against the pre-pass depth
     else:
         shaded = draw.valid & (draw.depth < exclusive_segmented_cummin(zk, draw.seg))  # GL_LESS
-    shade_unit = _any_per_unit(draw, shaded) if n_s > 1 else shaded
+    shade_unit = _any_per_unit(draw, shaded)
     writer = shaded & keep
     order = jnp.arange(draw.tri.shape[0], dtype=jnp.int32)
     win = jnp.full((n_slots,), -1, jnp.int32).at[draw.slot].max(
@@ -206,7 +210,7 @@ def _counts(scene, draw: DrawList, ql, invocations, covered, alpha_invocations, 
     """Waves: the quads of one material are packed into waves of their own."""
     n_mat = scene.materials.albedo.shape[0]
     mat_q = scene.tri_material[jnp.where(ql["start"], ql["tri"], 0)]
-    quads_per_mat = jnp.zeros((n_mat,), jnp.int32).at[mat_q].add(ql["start"].astype(jnp.int32))
+    quads_per_mat = group_sizes(mat_q, ql["start"], n_mat)
     waves, util = count_waves(quads_per_mat * 4, cfg.wave_size, invocations)
     lanes = ql["n_quads"] * 4
     return make_counts(

@@ -47,6 +47,22 @@ def tile_waves(active: Array, wave_size: int, invocations: Array) -> tuple[Array
     return count_waves(tile_rows(active, wave_size), wave_size, invocations)
 
 
+# A scatter-add of millions of entries into a few bins serialises on the bins' atomics (6 ms
+# for the quads of foliage's handful of materials on an H200); spreading each bin over this many
+# partial counters, summed afterwards, keeps the atomics apart.
+SPREAD = 1024
+
+
+def group_sizes(group: Array, live: Array, n_groups: int) -> Array:
+    """int32[n_groups]: how many live entries of int32[N] ``group`` fall in each group."""
+    n = group.shape[0]
+    spread = max(1, min(SPREAD, (1 << 22) // max(int(n_groups), 1), n))
+    lane = jnp.arange(n, dtype=jnp.int32) % spread
+    partial = jnp.zeros((int(n_groups), spread), jnp.int32).at[
+        jnp.where(live, group, n_groups), lane].add(1, mode="drop")
+    return jnp.sum(partial, axis=1, dtype=jnp.int32)
+
+
 def segment_lanes(starts: Array, live: Array) -> Array:
     """Items per segment of a sorted work list (``starts``: bool[N], True at each segment's
     first item; ``live``: the items that exist): int32[N], segment k's size at index k."""

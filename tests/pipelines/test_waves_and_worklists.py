@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import dispatch
-from jaxrender.pipelines.waves import count_waves, segment_lanes, tile_rows, tile_waves
+from jaxrender.pipelines.waves import (count_waves, group_sizes, segment_lanes, tile_rows,
+                                      tile_waves)
 
 
 def test_worklist_counts_come_from_the_dispatch(rng):
@@ -24,6 +25,24 @@ def test_worklist_counts_come_from_the_dispatch(rng):
     assert int(done.idle_lanes) == chunks * 64 - n
     assert done.counts == {"invocations": done.invocations, "lanes": done.lanes,
                            "chunks": done.chunks}
+
+
+@pytest.mark.parametrize("n", [0, 1, 7, 8, 63, 64, 65, 200, 999, 1000])
+def test_dispatch_tail_launches_follow_the_work(n):
+    """Full chunks of 64, then halving launches: every item written once, fewer than 2 x 8
+    idle lanes launched whatever the remainder, and at most one launch per size."""
+    size, chunk, smallest = 1000, 64, 8
+    active = np.zeros(size, bool)
+    active[np.random.default_rng(n).permutation(size)[:n]] = True
+    work = dispatch.WorkList.of(jnp.asarray(active))
+    out, done = dispatch.run(work, lambda items, live: jnp.ones(items.shape, jnp.float32),
+                             jnp.zeros((size,), jnp.float32), chunk, smallest)
+    np.testing.assert_array_equal(np.asarray(out), active.astype(np.float32))
+    lanes, launches = int(done.lanes), int(done.chunks)
+    assert n <= lanes < n + 2 * smallest, (n, lanes)
+    assert launches <= n // chunk + len(dispatch.tail_sizes(chunk, smallest)) + 1, launches
+    assert dispatch.tail_sizes(chunk, smallest) == (32, 16, 8)
+    assert dispatch.tail_sizes(64, 64) == () and dispatch.tail_sizes(4096) == ()
 
 
 @pytest.mark.parametrize("wave_size", [32, 64])
@@ -57,3 +76,12 @@ def test_segment_lanes():
     starts = jnp.asarray([True, False, True, True, False, False, True])
     live = jnp.asarray([True, True, True, True, True, False, False])
     np.testing.assert_array_equal(np.asarray(segment_lanes(starts, live)), [2, 1, 2, 0, 0, 0, 0])
+
+
+@pytest.mark.parametrize("n_groups", [1, 3, 5000])
+def test_group_sizes_is_a_histogram(rng, n_groups):
+    group = rng.integers(0, n_groups, 20000)
+    live = rng.random(20000) < 0.7
+    got = group_sizes(jnp.asarray(group, jnp.int32), jnp.asarray(live), n_groups)
+    np.testing.assert_array_equal(np.asarray(got), np.bincount(group[live], minlength=n_groups),
+                                  err_msg=f"{n_groups} groups")
