@@ -114,11 +114,18 @@ def _spatial(img, ids, depth, ncov):
     okf = [o.astype(jnp.float32)[..., None] for o in ok]
     wsum = sum(okf)
     avg = sum(o * c for o, c in zip(okf, cs)) / jnp.maximum(wsum, 1.0)
+    # The neighbour nearest in depth, the first of equals (as argmin), by running comparisons:
+    # an argmin over a stacked axis of 4 compiles to a slow variadic reduction on a GPU.
     inf = jnp.float32(jnp.inf)
-    dd = jnp.stack([jnp.where(nc, jnp.abs(shift(depth, dy, dx, 0.0) - depth), inf)
-                    for nc, (dy, dx) in zip(ncov, NEIGHBOURS)], axis=-1)
-    best = jnp.argmin(dd, axis=-1)
-    nearest = jnp.take_along_axis(jnp.stack(cs, axis=-2), best[..., None, None], axis=-2)[..., 0, :]
+    nearest, best = cs[0], None
+    for c, nc, (dy, dx) in zip(cs, ncov, NEIGHBOURS):
+        d = jnp.where(nc, jnp.abs(shift(depth, dy, dx, 0.0) - depth), inf)
+        if best is None:
+            best = d
+            continue
+        take = d < best
+        nearest = jnp.where(take[..., None], c, nearest)
+        best = jnp.where(take, d, best)
     return jnp.where(wsum > 0.0, avg, nearest)
 
 

@@ -157,6 +157,10 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     cov_f = covered.reshape(-1)
     thr = jnp.asarray(threshold, jnp.float32)
     t = {k: jnp.asarray(v) for k, v in tab.items() if k != "sizes"}
+    # A level shades a small part of its pixels (a few percent past the first level), so its
+    # work list is chunked for a sixteenth of the largest level, not for all of it: the idle
+    # lanes of each level's last chunk are work the GPU does.
+    level_chunk = dispatch.resolve_chunk(chunk, max(n_max // 16, 1))
 
     def level_body(level, carry):
         img, needs, inv, lanes, chunks = carry
@@ -179,7 +183,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
         with jax.named_scope("shade"):
             listed = dispatch.WorkList.of(need)
             img, work = dispatch.run(dispatch.WorkList(pix[listed.items], listed.count),
-                                     shade_fn, img, chunk)
+                                     shade_fn, img, level_chunk)
         needs = needs.at[level].set(need)
         return (img, needs, inv + work.invocations, lanes + work.lanes, chunks + work.chunks)
 

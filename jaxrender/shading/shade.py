@@ -168,14 +168,17 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     else:
         # Shader-cost layers: the lights again with the normal nudged along the tangent by
         # a layer-dependent angle (< LAYER_NUDGE), so XLA cannot hoist or merge the layers.
+        # Batched over the layers (vmap), not looped: a loop on a GPU pays a host round trip
+        # and its kernels' launches per layer, so a launch's cost would grow with the layers
+        # whatever its lanes; batched, XLA fuses the layers and the cost is the work.
         t = safe_normalize(points.tangent[:, :3] - n * dot(n, points.tangent[:, :3]), n)
+        angles = LAYER_NUDGE * ((jnp.arange(layers, dtype=jnp.float32) + 0.5) / layers - 0.5)
 
-        def layer(i, acc):
-            ang = LAYER_NUDGE * ((i.astype(jnp.float32) + 0.5) / layers - 0.5)
+        def layer(ang):
             n_i = safe_normalize(n + t * ang, n)
-            return acc + _lights(points, scene, effects, n_i, albedo, spec_params)
+            return _lights(points, scene, effects, n_i, albedo, spec_params)
 
-        direct = jax.lax.fori_loop(0, layers, layer, jnp.zeros_like(albedo)) / layers
+        direct = jnp.sum(jax.vmap(layer)(angles), axis=0) / layers
     rgb = direct + albedo * scene.lights.ambient[None, :]
     if effects.emissive:
         rgb = rgb + _gather(m.emissive, mat)

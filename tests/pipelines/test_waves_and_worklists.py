@@ -27,24 +27,6 @@ def test_worklist_counts_come_from_the_dispatch(rng):
                            "chunks": done.chunks}
 
 
-@pytest.mark.parametrize("n", [0, 1, 7, 8, 63, 64, 65, 200, 999, 1000])
-def test_dispatch_tail_launches_follow_the_work(n):
-    """Full chunks of 64, then halving launches: every item written once, fewer than 2 x 8
-    idle lanes launched whatever the remainder, and at most one launch per size."""
-    size, chunk, smallest = 1000, 64, 8
-    active = np.zeros(size, bool)
-    active[np.random.default_rng(n).permutation(size)[:n]] = True
-    work = dispatch.WorkList.of(jnp.asarray(active))
-    out, done = dispatch.run(work, lambda items, live: jnp.ones(items.shape, jnp.float32),
-                             jnp.zeros((size,), jnp.float32), chunk, smallest)
-    np.testing.assert_array_equal(np.asarray(out), active.astype(np.float32))
-    lanes, launches = int(done.lanes), int(done.chunks)
-    assert n <= lanes < n + 2 * smallest, (n, lanes)
-    assert launches <= n // chunk + len(dispatch.tail_sizes(chunk, smallest)) + 1, launches
-    assert dispatch.tail_sizes(chunk, smallest) == (32, 16, 8)
-    assert dispatch.tail_sizes(64, 64) == () and dispatch.tail_sizes(4096) == ()
-
-
 @pytest.mark.parametrize("wave_size", [32, 64])
 def test_count_waves_is_a_ceiling_per_group(rng, wave_size):
     lanes = rng.integers(0, 200, 17)

@@ -44,5 +44,22 @@ def test_each_effect_removes_work_when_off():
         off = _hlo(scene, full.replace(**{flag: False}))
         assert len(off) < len(base), f"{flag} off should shrink the program"
     assert "while" not in base
-    costly = _hlo(scene, full.replace(shader_cost=3))
-    assert "while" in costly, "shader_cost > 0 runs its layers in a loop"
+
+
+def _flops(scene, effects, n=64):
+    p = points(n)
+    compiled = jax.jit(lambda p, s: shade(p, s, effects)).lower(p, scene).compile()
+    analysis = compiled.cost_analysis()
+    return (analysis[0] if isinstance(analysis, list) else analysis)["flops"]
+
+
+def test_shader_cost_layers_are_work_not_loop_overhead():
+    """Layers are batched, not looped (a loop's per-layer round trip would cost as much on a
+    few lanes as on many), and each layer adds the same work: flops linear in the layers."""
+    scene = _scene()
+    full = scene.effects.replace(shadows=True, toksvig=True)
+    assert "while" not in _hlo(scene, full.replace(shader_cost=3)), "layers must not loop"
+    f = {c: _flops(scene, full.replace(shader_cost=c)) for c in (1, 3, 7)}
+    per_layer_low, per_layer_high = (f[3] - f[1]) / 2, (f[7] - f[3]) / 4
+    assert per_layer_low > 0, f
+    assert abs(per_layer_high / per_layer_low - 1) < 0.05, f"flops not linear in layers: {f}"

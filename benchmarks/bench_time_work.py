@@ -1,0 +1,123 @@
+"""Frame time against shading work: every pipeline on a few scenes at a few shader costs, and
+per (scene, pipeline) a least-squares line through (work, ms): the fixed cost and the slope.
+
+    python benchmarks/bench_time_work.py --scenes foliage terrain --costs 0 8 32 --out rows.jsonl
+
+Work is ``shade_invocations x (1 + shader_cost)`` (one unit: one light layer evaluated at one
+shaded point, ``Effects.shader_cost``). ``visibility`` is the visibility pass alone (what
+deferred, checkerboard and DACS rasterize before shading), the floor of every fixed cost.
+Rows are appended to ``--out`` as they are measured, so a run cut short keeps what it did.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import jax
+import numpy as np
+
+from jaxrender.timing import device_description, time_call
+
+DEFAULT_PIPELINES = ("visibility", "forward", "forward:z_prepass=true", "deferred", "visbuffer",
+                     "checkerboard", "dacs", "object_space")
+
+
+def parse_resolution(text: str) -> tuple[int, int]:
+    w, _, h = text.lower().partition("x")
+    return int(w), int(h)
+
+
+def visibility_program(scene, camera, cfg):
+    from jaxrender.pipelines.visibility import visibility
+
+    return jax.jit(lambda s, c: visibility(s, c, cfg).tri_id)
+
+
+def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repeats: int):
+    """One row: median and min ms of the steady-state frame, compile seconds, counts."""
+    from jaxrender.bench.pipelines import parse_spec
+    from jaxrender.pipelines import get_pipeline, make_config
+    from jaxrender.pipelines import program
+    from jaxrender.scene import default_camera
+    from jaxrender.shading import load_lit_scene
+
+    scene = load_lit_scene(scene_name, effects={"shader_cost": cost})
+    camera = default_camera(scene)
+    name, params = parse_spec(spec)
+    row = dict(scene=scene_name, pipeline=spec, shader_cost=cost, resolution=f"{width}x{height}")
+    t0 = time.perf_counter()
+    if name == "visibility":
+        cfg = make_config("deferred", width=width, height=height)
+        call = visibility_program(scene, camera, cfg).lower(scene, camera).compile()
+        row["compile_s"] = time.perf_counter() - t0
+        _, median, samples = time_call(call, scene, camera, repeats=repeats, warmup=2)
+        return dict(row, median_ms=median, min_ms=min(samples), shade_invocations=0)
+    cfg = make_config(name, width=width, height=height, **params)
+    call, _ = program.compile(get_pipeline(name), scene, camera, cfg)
+    row["compile_s"] = time.perf_counter() - t0
+    frame, median, samples = time_call(call, scene, camera, repeats=repeats, warmup=2)
+    counts = {k: float(np.asarray(v)) for k, v in frame.counts.items() if np.ndim(v) == 0}
+    keep = ("shade_invocations", "lanes", "dispatch_lanes", "fragments", "waves", "overflow")
+    return dict(row, median_ms=median, min_ms=min(samples),
+                **{k: counts[k] for k in keep if k in counts})
+
+
+def fit(rows):
+    """(intercept ms, slope ms per million work units, residual rms ms) per (scene, pipeline)."""
+    out = {}
+    groups = {}
+    for r in rows:
+        if "median_ms" in r and r["pipeline"] != "visibility":
+            groups.setdefault((r["scene"], r["pipeline"]), []).append(r)
+    for key, rs in groups.items():
+        x = np.array([r["shade_invocations"] * (1 + r["shader_cost"]) / 1e6 for r in rs])
+        y = np.array([r["median_ms"] for r in rs])
+        if len(rs) < 2 or np.ptp(x) == 0:
+            continue
+        slope, intercept = np.polyfit(x, y, 1)
+        resid = y - (intercept + slope * x)
+        out[key] = (float(intercept), float(slope), float(np.sqrt(np.mean(resid ** 2))))
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", nargs="+", default=["foliage", "terrain"])
+    ap.add_argument("--pipelines", nargs="+", default=list(DEFAULT_PIPELINES))
+    ap.add_argument("--costs", nargs="+", type=int, default=[0, 8, 32])
+    ap.add_argument("--resolution", default="1920x1080")
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--budget", type=float, default=0.0, help="seconds; 0: no limit")
+    ap.add_argument("--out", default="time_work.jsonl")
+    ap.add_argument("--label", default="", help="a tag written into every row (e.g. 'before')")
+    a = ap.parse_args(argv)
+    w, h = parse_resolution(a.resolution)
+    t_start = time.time()
+    print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)
+    rows = []
+    for scene in a.scenes:
+        for spec in a.pipelines:
+            for cost in ([0] if spec == "visibility" else a.costs):
+                if a.budget and time.time() - t_start > a.budget:
+                    row = dict(scene=scene, pipeline=spec, shader_cost=cost, skipped="budget")
+                else:
+                    try:
+                        row = measure(scene, spec, cost, w, h, a.repeats)
+                    except Exception as e:  # noqa: BLE001 - a failed row is kept with its reason
+                        row = dict(scene=scene, pipeline=spec, shader_cost=cost,
+                                   error=f"{type(e).__name__}: {e}"[:300])
+                row["label"] = a.label
+                rows.append(row)
+                with open(a.out, "a") as f:
+                    f.write(json.dumps(row) + "\n")
+                print(json.dumps(row), flush=True)
+    for (scene, spec), (b, m, rms) in fit(rows).items():
+        print(f"fit {a.label} {scene} {spec}: fixed {b:.3f} ms, slope {m:.4f} ms/M, rms {rms:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
