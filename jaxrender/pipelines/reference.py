@@ -9,8 +9,8 @@ samples count as black background).
 
 Memory: the samples are processed one at a time in a ``lax.fori_loop`` that accumulates the
 image, and each sample's covered points are shaded through the compacted, chunked dispatch
-(``pipelines.dispatch``), so the peak is one (H, W) visibility buffer plus one shading chunk,
-whatever k is: 1920x1080 at k = 8 needs a few hundred MiB, not 64 visibility buffers.
+(``pipelines.dispatch``, by default one screen-sized launch per sample), so the peak is one
+(H, W) visibility buffer plus one screen of shading, whatever k is, not k^2 visibility buffers.
 
 Alpha-tested scenes (``effects.alpha_test``): a fragment that fails the alpha test at its
 sample position is discarded before the depth test, so the sample sees what lies behind it.
@@ -51,8 +51,10 @@ DEFAULT_K = 8
 @dataclass(frozen=True)
 class ReferenceConfig(RenderConfig):
     """k: samples per pixel side (k x k stratified cell centres); chunk: shading work-list
-    chunk size (0: sized to the screen, see ``dispatch.auto_chunk``; it shows in the dispatch
-    counts lanes, chunks and helper_lanes); convergence: also render at
+    chunk size (0: the whole screen, one launch per sample: a sample's covered pixels are most
+    of the screen, and k^2 samples times several launches each cost more in launches than the
+    idle lanes of one; it shows in the dispatch counts lanes, chunks and helper_lanes);
+    convergence: also render at
     2k and report ``counts['convergence_psnr']`` (LDR PSNR between the k and 2k images; costs
     5x the plain render)."""
 
@@ -141,7 +143,7 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
         with jax.named_scope("shade"):
             rgb, work = dispatch.shade(dispatch.WorkList.of(tri >= 0), points_of,
                                        lambda p: shade(p, scene),
-                                       jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
+                                       jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk or n_pix)
         new = {"shade_invocations": work.invocations, "lanes": work.lanes,
                "chunks": work.chunks, "fragments": rc["fragments"],
                "work_items": rc["work_items"]}
