@@ -5,7 +5,8 @@ per (scene, pipeline) a least-squares line through (work, ms): the fixed cost an
 
 Work is ``shade_invocations x (1 + shader_cost)`` (one unit: one light layer evaluated at one
 shaded point, ``Effects.shader_cost``). ``visibility`` is the visibility pass alone (what
-deferred, checkerboard and DACS rasterize before shading), the floor of every fixed cost.
+deferred, checkerboard and DACS rasterize before shading), the floor of every fixed cost;
+it and the reference are measured at the first cost only.
 Rows are appended to ``--out`` as they are measured, so a run cut short keeps what it did.
 """
 
@@ -22,7 +23,8 @@ import numpy as np
 from jaxrender.timing import device_description, time_call
 
 DEFAULT_PIPELINES = ("visibility", "forward", "forward:z_prepass=true", "deferred", "visbuffer",
-                     "checkerboard", "dacs", "object_space")
+                     "checkerboard", "dacs", "object_space", "reference")
+SINGLE_COST = ("visibility", "reference")  # measured at the first cost only
 
 
 def parse_resolution(text: str) -> tuple[int, int]:
@@ -70,7 +72,7 @@ def fit(rows):
     out = {}
     groups = {}
     for r in rows:
-        if "median_ms" in r and r["pipeline"] != "visibility":
+        if "median_ms" in r and r["pipeline"] not in SINGLE_COST:
             groups.setdefault((r["scene"], r["pipeline"]), []).append(r)
     for key, rs in groups.items():
         x = np.array([r["shade_invocations"] * (1 + r["shader_cost"]) / 1e6 for r in rs])
@@ -100,7 +102,7 @@ def main(argv=None) -> int:
     rows = []
     for scene in a.scenes:
         for spec in a.pipelines:
-            for cost in ([0] if spec == "visibility" else a.costs):
+            for cost in (a.costs[:1] if spec in SINGLE_COST else a.costs):
                 if a.budget and time.time() - t_start > a.budget:
                     row = dict(scene=scene, pipeline=spec, shader_cost=cost, skipped="budget")
                 else:
