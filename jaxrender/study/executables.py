@@ -12,10 +12,11 @@ dtype and weak type, read off the concrete arguments). A hit is loaded with
 Entries live in ``$JAXRENDER_CACHE/executables/``, one file per program, written to a temporary
 name and renamed, with a digest of their contents: a partial, corrupt or unloadable entry is a
 miss (logged), never a failed study. Storing may fail too (logged, the study goes on). Only
-freshly compiled executables are stored, never one JAX's cache loaded (on XLA:CPU such an
-executable serializes without its code and fails only when it runs): the study's compiles run
-with JAX's cache suspended (``compile_cache.suspended``), and a compile that was loaded from it
-anyway is not stored. ``JAXRENDER_COMPILATION_CACHE=0`` turns the store off with the cache.
+an executable XLA compiled just now is stored, never one loaded from JAX's cache (on XLA:CPU
+such an executable serializes without its code and fails only when it runs) nor one jax kept
+in memory (which may have been loaded so): the study compiles what the store misses with
+JAX's cache suspended (``compile_cache.suspended``), and each compile's own events say how it
+went. ``JAXRENDER_COMPILATION_CACHE=0`` turns the store off with the cache.
 
 Loading an entry runs code from it: the store is as trusted as the cache folder it lives in.
 """
@@ -142,10 +143,13 @@ def program_key(pipe, fixed, args) -> str | None:
     try:
         leaves, treedef = jax.tree_util.tree_flatten(args)
         avals = [jax.typeof(x) for x in leaves]
+        # Pickled as well as written out: a repr may leave a field out, a pickle does not.
+        statics = hashlib.sha256(pickle.dumps((static_cfg, mode, treedef))).hexdigest()
         parts = {**_environment(), "pipeline": [pipe.name, _sources(pipe)],
                  "config": repr(static_cfg), "mode": repr(mode), "tree": str(treedef),
+                 "statics": statics,
                  "avals": [[str(a.dtype), list(a.shape), bool(a.weak_type)] for a in avals]}
-    except (TypeError, ValueError, OSError, AttributeError) as e:
+    except (TypeError, ValueError, OSError, AttributeError, pickle.PicklingError) as e:
         log.info("executable store: %s cannot be keyed (%s: %s)", pipe.name,
                  type(e).__name__, e)
         return None

@@ -44,9 +44,12 @@ def _store_counts(line):
 
 def test_rerun_loads_every_program(tiny_study, tmp_path, monkeypatch):
     monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    # As in a new process: programs jax kept in memory from the tests before are not stored.
+    jax.clear_caches()
     first, line1 = _study(tiny_study, tmp_path / "one", monkeypatch)
     n = int(re.search(r"(\d+) program\(s\)", line1)[1])
     assert _store_counts(line1) == (0, n + 2), line1  # and both scenes' reference programs
+    assert "not stored" not in line1, line1
     stored = list(executables.folder().glob(f"*{executables.SUFFIX}"))
     assert len(stored) == n + 2, stored
     second, line2 = _study(tiny_study, tmp_path / "two", monkeypatch)
