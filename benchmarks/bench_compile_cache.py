@@ -3,7 +3,7 @@
 Runs a study four ways, each in a fresh process with its own cache folder: compile workers in
 processes or in threads, from an empty cache (first run) and again with ``--force`` (every
 reference and executable cached). Prints the wall time of each run and the study's own
-"compiled ... in N s" line. Usage:
+"compiled or loaded ... in N s" line. Usage:
 
     python benchmarks/bench_compile_cache.py [--study studies/quickstart.toml] [--frames N]
 """
@@ -19,7 +19,7 @@ import tempfile
 import time
 from pathlib import Path
 
-COMPILED = re.compile(r"compiled (\d+) program\(s\).* in ([\d.]+) s")
+COMPILED = re.compile(r"compiled or loaded (\d+) program\(s\).* in ([\d.]+) s")
 
 
 def one_run(study: str, out: Path, cache: Path, processes: bool, force: bool,

@@ -37,7 +37,9 @@ def environment() -> dict:
 class Compiled:
     """A compiled pipeline program ready to time: ``call(scene, cameras) -> Frame`` (one
     camera, or a path for a sequence program). compile_ms is jax's lower + compile time,
-    host-side preparation (object-space sheets) included; method is ``"aot"``."""
+    host-side preparation (object-space sheets) included; method is ``"aot"``, or
+    ``"stored"`` for a program the study loaded from its executable store (compile_ms then
+    the preparation and the load)."""
 
     call: Callable
     compile_ms: float

@@ -161,4 +161,4 @@ def test_builtin_presets_then_a_local_override(installed, tmp_path):
             "overrides the built-in)") in resolved, resolved
     assert "pixels_per_frame = 2.0" in resolved, resolved
     # The same programs as the first run (cameras are arguments, not constants): all loaded.
-    assert re.search(r"compilation cache: \d+ loaded, 0 compiled", log), log
+    assert re.search(r"executable store: \d+ loaded, 0 compiled", log), log

@@ -187,11 +187,23 @@ def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0) -> Fra
     return frames if _is_traced(*args) else check_overflow(pipe, cfg, frames)
 
 
+def arguments(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0):
+    """(static jit arguments, dynamic arguments, Prepared) of ``pipe``'s program, host-side
+    preparation done and nothing traced: what identifies a compiled program without lowering
+    it (the study's executable store keys on these)."""
+    return _arguments(pipe, scene, cameras, cfg, sequence, warmup_frames)
+
+
+def lower_arguments(fixed, args):
+    """The jax Lowered program of ``arguments``' static and dynamic arguments."""
+    return _program_jit.lower(*fixed, *args)
+
+
 def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0):
     """(jax Lowered program, Prepared) for ``pipe`` on this scene and camera (a single camera,
     or a path when ``sequence``)."""
     fixed, args, prepared = _arguments(pipe, scene, cameras, cfg, sequence, warmup_frames)
-    return _program_jit.lower(*fixed, *args), prepared
+    return lower_arguments(fixed, args), prepared
 
 
 def bind(pipe, cfg, compiled, prepared: Prepared) -> Callable:
@@ -217,6 +229,6 @@ def compile(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames:
     return bind(pipe, cfg, compiled, prepared), (time.perf_counter() - t0) * 1e3
 
 
-__all__ = ["PipelineOverflow", "Prepared", "bind", "cache_size", "check_overflow", "clear_cache", "compile",
-           "join_config", "lower", "render", "render_sequence", "split_config",
-           "stack_cameras"]
+__all__ = ["PipelineOverflow", "Prepared", "arguments", "bind", "cache_size", "check_overflow",
+           "clear_cache", "compile", "join_config", "lower", "lower_arguments", "render",
+           "render_sequence", "split_config", "stack_cameras"]

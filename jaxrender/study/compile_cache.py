@@ -9,6 +9,7 @@ setting with the rest of the parent's ``jax.config``.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
 from pathlib import Path
@@ -24,6 +25,12 @@ _EVENTS = {"/jax/compilation_cache/cache_hits": "hits",
 _counts = {"hits": 0, "misses": 0}
 _lock = threading.Lock()
 _listening = False
+# JAX reports its events in the thread that compiles, so a thread can tell how its own
+# compile went while other threads compile beside it: XLA ran (a compile, or a load from
+# this cache), and whether it loaded from this cache. An executable JAX keeps in memory
+# reports neither.
+_BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
+_this_thread = threading.local()
 
 
 def default_dir() -> Path:
@@ -35,12 +42,33 @@ def _count(event: str, **_) -> None:
     if key:
         with _lock:
             _counts[key] += 1
+        if key == "hits":
+            _this_thread.hits = getattr(_this_thread, "hits", 0) + 1
+
+
+def _count_compile(event: str, duration: float, **_) -> None:
+    if event == _BACKEND_COMPILE:
+        _this_thread.compiles = getattr(_this_thread, "compiles", 0) + 1
+
+
+def _listen() -> None:
+    global _listening
+    with _lock:
+        if not _listening:
+            jax.monitoring.register_event_listener(_count)
+            jax.monitoring.register_event_duration_secs_listener(_count_compile)
+            _listening = True
+
+
+def turned_off() -> bool:
+    """``JAXRENDER_COMPILATION_CACHE=0`` (or false, no, off): no persistent cache, no
+    executable store."""
+    return os.environ.get(ENV_OFF, "").strip().lower() in ("0", "false", "no", "off")
 
 
 def enable(directory: Path | None = None) -> Path | None:
     """Turn the persistent cache on (idempotent); the folder used, or None when it is off."""
-    global _listening
-    if os.environ.get(ENV_OFF, "").strip().lower() in ("0", "false", "no", "off"):
+    if turned_off():
         return None
     users = os.environ.get("JAX_COMPILATION_CACHE_DIR")
     folder = Path(directory or users or default_dir())
@@ -50,10 +78,33 @@ def enable(directory: Path | None = None) -> Path | None:
         compilation_cache.reset_cache()  # JAX opens its cache folder once per process
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
-    if not _listening:
-        jax.monitoring.register_event_listener(_count)
-        _listening = True
+    _listen()
     return folder
+
+
+def thread_compiles() -> tuple[int, int]:
+    """(XLA compiles, loads from the persistent cache among them) of this thread so far."""
+    _listen()
+    return getattr(_this_thread, "compiles", 0), getattr(_this_thread, "hits", 0)
+
+
+@contextlib.contextmanager
+def suspended():
+    """The persistent cache off for every compile inside (all threads), restored after: for
+    programs whose executables are serialized, since on XLA:CPU an executable loaded from the
+    cache serializes without its code. Callers hold no other compiles during it."""
+    folder = jax.config.values.get("jax_compilation_cache_dir")
+    enabled = jax.config.values.get("jax_enable_compilation_cache", True)
+    if not folder or not enabled:
+        yield
+        return
+    jax.config.update("jax_enable_compilation_cache", False)
+    compilation_cache.reset_cache()  # JAX decides once per process whether its cache is used
+    try:
+        yield
+    finally:
+        jax.config.update("jax_enable_compilation_cache", True)
+        compilation_cache.reset_cache()
 
 
 def counts() -> dict:

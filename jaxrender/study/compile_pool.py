@@ -4,21 +4,22 @@ under the GIL) run in parallel and not only XLA's compile.
 Each job names a scene (``load_scene(source, params)``, or carries it loaded), a camera path
 (``make_cameras(scene, path, width, height)``), a registered Pipeline and its config, and
 whether it is the single-frame program (first camera) or the sequence program (the whole path,
-with ``warmup_frames`` dropped). The worker loads the scene itself (cached per worker), lowers
-and compiles the program exactly as ``timing.compile_program`` does in-process
-(``pipelines.program.lower``), and returns the executable serialized with
-``jax.experimental.serialize_executable`` beside the program's ``Prepared`` arguments
-(object-space's sheet, traced config values); the parent deserializes it onto its first device
-and binds it (``program.bind``) into a ``timing.Compiled`` whose compile_ms is the worker's
-lower+compile time.
+with ``warmup_frames`` dropped). The worker loads the scene itself (cached per worker), prepares
+the program's arguments, reads its executable from the executable store (``executables``) or
+lowers, compiles and stores it as the in-process path does, and returns the executable
+serialized with ``jax.experimental.serialize_executable`` beside the program's ``Prepared``
+arguments (object-space's sheet, traced config values); the parent deserializes it onto its
+first device and binds it (``program.bind``) into a ``timing.Compiled`` whose compile_ms is
+the worker's preparation and lower+compile (or store read) time.
 
 Every job that cannot go through a worker (unpicklable pieces, a worker error, an executable
 that does not serialize, a broken pool) is compiled by the caller's ``fallback`` in a thread
 instead, with a logged note: a program is never dropped.
 
 ``JAXRENDER_COMPILE_TIMELINE=1`` makes each worker print one line per program to stderr: wall
-clock start and end, and the seconds spent getting the scene, lowering (with any host-side
-preparation) and compiling, to find which programs make a study's critical path.
+clock start and end, and the seconds spent getting the scene, preparing the arguments (with
+any host-side preparation) and reading the store, and lowering and compiling, to find which
+programs make a study's critical path.
 
 Workers are started with "spawn" (never "fork": the parent has JAX/CUDA threads), without the
 parent's ``__main__`` (as ``jaxrender.figures.parallel`` does), with
@@ -111,32 +112,36 @@ def _cameras(job: Job):
 
 
 def compile_job(payload: bytes) -> bytes:
-    """Worker: the pickled Job -> pickled (compile_ms, executable, in_tree, out_tree,
-    prepared). The job and the result travel as bytes so that a (un)pickling error is this
-    job's error, never the pool's."""
-    from jax.experimental.serialize_executable import serialize
-
+    """Worker: the pickled Job -> pickled (compile_ms, executable bytes (``executables.pack``),
+    prepared, stored: whether they came from the executable store). The job and the result
+    travel as bytes so that a (un)pickling error is this job's error, never the pool's."""
     from jaxrender.pipelines import program
+    from jaxrender.study import executables
 
     job: Job = pickle.loads(payload)
     started, t_start = time.time(), time.perf_counter()
     scene, cams = _cameras(job)
     t0 = time.perf_counter()
-    lowered, prepared = program.lower(job.pipeline, scene, cams, job.cfg, sequence=job.sequence,
-                                      warmup_frames=job.warmup_frames)
-    t_lowered = time.perf_counter()
-    compiled = lowered.compile()
+    fixed, args, prepared = program.arguments(job.pipeline, scene, cams, job.cfg,
+                                              sequence=job.sequence,
+                                              warmup_frames=job.warmup_frames)
+    key = executables.program_key(job.pipeline, fixed, args)
+    exe = executables.read(key)
+    t_prepared = time.perf_counter()
+    stored = exe is not None
+    if not stored:
+        compiled, exe = executables.compile_fresh(key, fixed, args)
+        exe = exe if exe is not None else executables.pack(compiled)
     t_end = time.perf_counter()
-    ms = (t_end - t0) * 1e3
-    exe, in_tree, out_tree = serialize(compiled)
     if os.environ.get("JAXRENDER_COMPILE_TIMELINE"):
         import sys
 
         print(f"TIMELINE pid={os.getpid()} {job.source} {type(job.cfg).__name__} "
               f"sequence={job.sequence} start={started:.2f} scene_s={t0 - t_start:.2f} "
-              f"lower_s={t_lowered - t0:.2f} compile_s={t_end - t_lowered:.2f} "
-              f"end={started + t_end - t_start:.2f}", file=sys.stderr, flush=True)
-    return pickle.dumps((ms, exe, in_tree, out_tree, prepared))
+              f"prepare_s={t_prepared - t0:.2f} compile_s={t_end - t_prepared:.2f} "
+              f"stored={stored} end={started + t_end - t_start:.2f}", file=sys.stderr,
+              flush=True)
+    return pickle.dumps(((t_end - t0) * 1e3, exe, prepared, stored))
 
 
 # ------------------------------------------------------------------ parent side
@@ -158,17 +163,14 @@ def _worker_environment():
 
 def load(result: bytes, job: Job):
     """The parent's ``timing.Compiled`` from a worker's result."""
-    import jax
-    from jax.experimental.serialize_executable import deserialize_and_load
-
-    from jaxrender.pipelines import program
     from jaxrender import timing
+    from jaxrender.pipelines import program
+    from jaxrender.study import executables
 
-    ms, exe, in_tree, out_tree, prepared = pickle.loads(result)
-    dev = jax.devices()[0]
-    compiled = deserialize_and_load(exe, in_tree, out_tree, backend=dev.client,
-                                    execution_devices=[dev])
-    return timing.Compiled(program.bind(job.pipeline, job.cfg, compiled, prepared), float(ms))
+    ms, exe, prepared, stored = pickle.loads(result)
+    call = program.bind(job.pipeline, job.cfg, executables.unpack(exe), prepared)
+    executables.note_worker_program(stored)
+    return timing.Compiled(call, float(ms), "stored" if stored else "aot")
 
 
 class ProcessCompiler:

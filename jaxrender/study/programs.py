@@ -15,7 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 from jaxrender import timing
-from jaxrender.study import backend, compile_pool, references
+from jaxrender.study import backend, compile_cache, compile_pool, executables, references
 from jaxrender.study.specs import Study
 
 # Programs compiled side by side. compile_ms is the wall time of a compile that shared the
@@ -34,8 +34,8 @@ def compile_variant(study: Study, scene, cameras, variant, *, sequence: bool) ->
     w, h = study.resolution
     pipe = backend.pipeline(variant.type)
     cfg = backend.make_config(variant.type, w, h, dict(variant.params))
-    return timing.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
-                                  warmup_frames=study.warmup_frames if sequence else 0)
+    return executables.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
+                                       warmup_frames=study.warmup_frames if sequence else 0)
 
 
 def program_key(spec, variant, frames: int = 0) -> tuple:
@@ -82,7 +82,15 @@ def compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
     path length and the single-frame program), and the reference program of each scene whose
     references are not all cached, while this thread renders the references into the cache.
     ``cams[scene label, path name]`` are the rendered path's cameras (warm-up included).
-    Returns {program_key: Compiled}."""
+    Returns {program_key: Compiled}. Programs in the executable store are loaded from it;
+    the others compile with JAX's cache suspended, so that each can be stored."""
+    if executables.enabled():
+        with compile_cache.suspended():
+            return _compile_all(study, todo, scenes, cams)
+    return _compile_all(study, todo, scenes, cams)
+
+
+def _compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
     comp = _Compiler(study, scenes)
     pairs = {(s.label, p.name): (s, p) for s, p, _ in todo}
     warm, ref = study.warmup_frames, study.reference

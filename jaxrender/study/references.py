@@ -7,14 +7,14 @@ from __future__ import annotations
 import numpy as np
 
 from jaxrender import timing
-from jaxrender.study import backend, cache, store
+from jaxrender.study import backend, cache, executables, store
 
 
 def compile_reference(scene, cam, ref, resolution) -> timing.Compiled:
     """The reference's single-frame program: references are rendered and cached per frame."""
     pipe = backend.pipeline(ref.pipeline)
     cfg = backend.make_config(ref.pipeline, *resolution, dict(ref.params))
-    return timing.compile_program(pipe, scene, cam, cfg)
+    return executables.compile_program(pipe, scene, cam, cfg)
 
 
 def all_cached(spec, cams, ref, resolution) -> bool:

@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from jaxrender import timing
 from jaxrender.pipelines.program import PipelineOverflow, stack_cameras
-from jaxrender.study import backend, cache, compile_cache, store, summary
+from jaxrender.study import backend, cache, compile_cache, executables, store, summary
 from jaxrender.study.programs import (COMPILE_WORKERS, compile_all, compile_variant,
                                       program_key, rendered_path)
 from jaxrender.study.references import reference_frames
@@ -222,11 +222,11 @@ def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log)
                 cams[spec.label, path.name] = backend.make_cameras(
                     scenes[spec.label], rendered_path(study, path), *study.resolution)
         bar.set_description("compiling; references")
-        t0, before = time.perf_counter(), compile_cache.counts()
+        t0, before = time.perf_counter(), (compile_cache.counts(), executables.counts())
         compiled = compile_all(study, todo, scenes, cams)
-        log(f"compiled {len(compiled)} program(s) with {COMPILE_WORKERS} worker(s) and "
-            f"rendered the references in {time.perf_counter() - t0:.1f} s"
-            f"{compile_cache.describe(before)}")
+        log(f"compiled or loaded {len(compiled)} program(s) with {COMPILE_WORKERS} worker(s) "
+            f"and rendered the references in {time.perf_counter() - t0:.1f} s"
+            f"{executables.describe(before[1])}{compile_cache.describe(before[0])}")
         t0 = time.perf_counter()
         for spec in study.scenes:
             for path in study.paths:

@@ -122,6 +122,12 @@ def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog, pers
     assert all(c.compile_ms > 0 for c in procs.values())
     _assert_bitwise(_frames(*plan, threads), _frames(*plan, procs))
     _assert_bitwise(ref_t, ref_p)  # the references, rendered by programs from a worker
+    if persistent_cache:  # the workers stored what they compiled: this process loads it all
+        monkeypatch.setenv(compile_pool.ENV, "0")
+        monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "cache1"))
+        stored = programs.compile_all(*plan)
+        assert {c.method for c in stored.values()} == {"stored"}
+        _assert_bitwise(_frames(*plan, threads), _frames(*plan, stored))
     jax.config.update("jax_compilation_cache_dir", previous)
 
 
