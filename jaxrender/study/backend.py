@@ -78,6 +78,9 @@ def with_shader_cost(scene, cost: int | None):
     """The scene with its ``Effects.shader_cost`` set to ``cost`` (None: unchanged)."""
     if cost is None:
         return scene
+    if getattr(scene, "effects", None) is None:
+        raise UserError(f"shader_cost: scene {getattr(scene, 'name', '?')!r} has no shader "
+                        "effects to set a cost on")
     return dataclasses.replace(scene, effects=scene.effects.replace(shader_cost=int(cost)))
 
 

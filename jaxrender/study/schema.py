@@ -5,7 +5,9 @@ expected a non-empty list``). A study composes reusable configs: scenes are buil
 scene files, camera paths may be presets and pipelines presets, each found by name in a local
 ``configs/{scenes,paths,pipelines}/`` (beside the study, or ``--configs DIR``) and then among
 the built-ins (``jaxrender.catalog``). Sweeps are explicit lists, combined as a cartesian
-product or zipped. See ``studies/quickstart.toml`` for a commented example.
+product or zipped. Every pipeline entry also takes ``shader_cost`` (an integer >= 0, in
+``params`` or ``sweep``): the scene's shader cost for its variants, in extra light layers
+(``jaxrender.study.shader_cost``). See ``studies/quickstart.toml`` for a commented example.
 """
 
 from __future__ import annotations

@@ -97,7 +97,8 @@ class Crossover:
 
 
 def _per_cost(fit: LinearFit, invocations: float) -> tuple[float, float]:
-    """(ms per unit of 1 + shader cost, its variance): slope x invocations."""
+    """(ms per layer, i.e. per unit of 1 + shader cost, and its variance): slope x
+    invocations."""
     k = invocations / MILLION
     return fit.slope_ms * k, (fit.slope_se * k) ** 2
 
@@ -112,7 +113,7 @@ def crossover(test: LinearFit, test_invocations: float, base: LinearFit,
     da, dk = test.intercept_ms - base.intercept_ms, k_b - k_t  # test faster when da < dk * u
     if not all(map(math.isfinite, (da, dk))):
         return Crossover(None, math.nan, "never: a fit is not finite")
-    rates = f"{k_t:.3g} vs {k_b:.3g} ms per unit of 1 + cost"
+    rates = f"{k_t:.3g} vs {k_b:.3g} ms per layer"
     if dk <= 0:
         if da < dk:  # faster at cost 0 and every cost up to where the lines meet
             back = da / dk - 1 if dk < 0 else math.inf
