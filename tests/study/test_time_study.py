@@ -5,7 +5,6 @@ and the figure draws them."""
 import csv
 import dataclasses
 
-
 from jaxrender.figures import render_figures
 from jaxrender.study import load_study, run_study, time_series
 
