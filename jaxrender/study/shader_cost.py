@@ -7,7 +7,8 @@ every light 1 + c times per shaded point (each layer with the shading normal nud
 changes. The key sets the scene's shader cost for that variant only; without it a variant
 renders with the scene's own (0 for the built-in scenes). Every variant's rows carry
 ``shader_cost`` and ``shading_work = shade_invocations x (1 + shader_cost)``: the layer
-evaluations its frame ran, the x axis of the time fits (``time_fit``).
+evaluations its frame ran, the x axis of the time fits (``time_fit``). Helper lanes (forward's 2x2 quads) run the shader
+too but are not invocations, so they show in forward's slope per unit of work, not in its work.
 
 The reference renders each scene with the scene's own shader: it is shared by every variant,
 and the layers change an image by far less than any pipeline's error.
