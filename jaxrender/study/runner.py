@@ -216,6 +216,8 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     if fits:  # the study sweeps shader_cost
         time_series.write_csv(fits, out_dir / "time_fits.csv")
         log("time against shading work (time_fits.csv):\n" + time_series.format_fits(fits))
+    else:  # none from an earlier run's sweep either
+        (out_dir / "time_fits.csv").unlink(missing_ok=True)
     warns = summary.convergence_warnings(study, rows)
     for w in warns:
         log(f"warning: {w}")

@@ -87,6 +87,13 @@ def fit_line(work, time_ms, *, rel_tol: float = REL_TOL,
                      -x.mean() * s2 / sxx, r2, rel, not bad.any(), note)
 
 
+def no_fit(n: int, note: str) -> LinearFit:
+    """The 'fit' of a series no line can be fitted to (its work does not vary): NaNs, not
+    linear, ``note`` saying why."""
+    nan = math.nan
+    return LinearFit(n, nan, nan, nan, nan, nan, nan, nan, False, note)
+
+
 @dataclass(frozen=True)
 class Crossover:
     """The shader cost from which ``test`` is faster than the baseline (None: never)."""

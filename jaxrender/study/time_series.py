@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from jaxrender.study import shader_cost, store
-from jaxrender.study.time_fit import Crossover, LinearFit, crossover, fit_line
+from jaxrender.study.time_fit import Crossover, LinearFit, crossover, fit_line, no_fit
 
 BASELINE = "deferred"  # the full-rate pipeline each crossover is measured against
 COLUMNS = ("scene", "camera_path", "pipeline", "params", "points", "shader_costs",
@@ -74,7 +74,7 @@ def fit_series(rows: list[dict], baseline: str = BASELINE) -> list[Series]:
         work = tuple(mean(c, shader_cost.WORK) for c in costs)
         times = tuple(mean(c, "time_ms") for c in costs)
         inv = float(np.mean([w / (1 + c) for w, c in zip(work, costs)]))
-        fitted.append((key, costs, work, times, inv, fit_line(work, times)))
+        fitted.append((key, costs, work, times, inv, _fit(work, times)))
     bases = {k[:2]: (fit, inv) for k, _, _, _, inv, fit in fitted
              if k[2] == baseline and k[3] == "{}"}
     out = []
@@ -84,6 +84,12 @@ def fit_series(rows: list[dict], baseline: str = BASELINE) -> list[Series]:
             cross = _crossover(fit, inv, bases.get(key[:2]), baseline, max(costs))
         out.append(Series(*key, costs, work, times, inv, fit, cross))
     return out
+
+
+def _fit(work, times) -> LinearFit:
+    if len(set(work)) < 2:  # e.g. nothing shaded: the cost changes no work
+        return no_fit(len(work), "no fit: the shading work is the same at every shader cost")
+    return fit_line(work, times)
 
 
 def _crossover(fit, inv, base, baseline: str, max_cost) -> Crossover:

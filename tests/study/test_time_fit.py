@@ -135,3 +135,11 @@ def test_series_from_rows():
     assert "fixed ms" in text and "(baseline)" in text
     lone = time_series.fit_series(_rows("checkerboard", 3.0, 0.05, 0.75e6))
     assert lone[0].crossover.cost is None and "no deferred" in lone[0].crossover.note
+
+
+def test_a_series_without_varying_work_is_kept_unfitted():
+    rows = _rows("deferred", 2.0, 0.05, 1.5e6) + _rows("checkerboard", 1.0, 0.0, 0.0)
+    cb, base = time_series.fit_series(rows)
+    assert cb.pipeline == "checkerboard" and not cb.fit.linear and "no fit" in cb.fit.note
+    assert math.isnan(cb.fit.intercept_ms) and cb.crossover.cost is None
+    assert base.fit.linear
