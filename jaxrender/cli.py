@@ -228,7 +228,12 @@ def _add_study(sub) -> None:
     s = sub.add_parser("study", help="run a study file", description=(
         "Render every (scene, camera path, pipeline variant, frame) of a study, score it "
         "against the cached reference, time it, and write results.jsonl, results.csv, the "
-        "resolved config and the figures. Rerunning resumes; --force recomputes."))
+        "resolved config and the figures. Rerunning resumes; --force recomputes. A pipeline "
+        "entry's shader_cost (in params or sweep) sets the scene's shader cost for its "
+        "variants, in extra light layers: each shaded point evaluates every light 1 + "
+        "shader_cost times; rows carry shader_cost and shading_work = shade_invocations x "
+        "(1 + shader_cost), and a shader_cost sweep writes time_fits.csv (fixed cost, ms per "
+        "million layer evaluations, crossover against deferred)."))
     s.add_argument("file", help="a study TOML file (e.g. studies/quickstart.toml) or a bundled "
                    "study's name (e.g. quickstart; `jaxrender studies` lists them)")
     _configs_argument(s)

@@ -6,8 +6,10 @@ and peak device memory, printed as markdown tables and written as JSON.
     python -m jaxrender.bench --sections raster --json raster.json
 
 The raster sweeps use the terrain of ``benchmarks/bench_raster.py`` (same mesh and camera);
-pipelines run on every built-in scene from its default camera; every row carries its compile
-time apart from its steady-state median. This module imports nothing heavy until ``run``.
+pipelines run on every built-in scene from its default camera, every (scene, pipeline) a row:
+a scene's programs compile side by side, then each is timed alone, and a row carries its
+compile time apart from its steady-state median. No default budget: every row runs to its
+repeats (``--budget`` caps a row's timed repeats, never skips one). This module imports nothing heavy until ``run``.
 """
 
 from __future__ import annotations
@@ -27,6 +29,12 @@ def _res(text: str) -> tuple[int, int]:
     raise argparse.ArgumentTypeError(f"expected WxH, e.g. 1920x1080, got {text!r}")
 
 
+def _workers(text: str) -> int:
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return int(text)
+
+
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true",
                    help="small sizes (a CPU smoke run) instead of the full sweeps")
@@ -41,12 +49,19 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="pipelines: names or name:key=value,... (default: every registered one)")
     p.add_argument("--repeats", type=int, help="timed repeats per row (default 10, quick 3)")
     p.add_argument("--budget", type=float, default=0.0, metavar="SECONDS",
-                   help="stop starting new pipeline rows after this long (0: no limit)")
+                   help="pipelines: seconds of timed repeats per row at most; a slow row "
+                        "takes fewer repeats, at least one (0: all --repeats). Every row runs: "
+                        "the budget never skips a scene or a pipeline")
+    p.add_argument("--compile-workers", type=_workers, default=None, metavar="N",
+                   help="pipelines: programs of a scene compiled side by side before any is "
+                        "timed (default: min(8, cores); 1: one after another, compile_s "
+                        "then is a lone compile's)")
     p.add_argument("--metric-frames", type=int, help="metrics: batch size (default 60, quick 2)")
     return p
 
 
 def run(a: argparse.Namespace) -> int:
+    import os
     import sys
     import time
 
@@ -99,9 +114,10 @@ def run(a: argparse.Namespace) -> int:
         w, h = a.resolution or ((160, 90) if a.quick else (1920, 1080))
         scenes = a.scenes or (["terrain"] if a.quick else pipelines.default_scene_specs())
         pipes = a.pipelines or pipelines.default_pipeline_specs()
-        deadline = t_start + a.budget if a.budget > 0 else None
-        section("pipelines", pipelines.time_pipelines(scenes, pipes, w, h, repeats=repeats,
-                                                      deadline=deadline), pipelines.COLUMNS)
+        workers = a.compile_workers or max(1, min(8, os.cpu_count() or 1))
+        section("pipelines", pipelines.time_pipelines(
+            scenes, pipes, w, h, repeats=repeats, budget_s=a.budget if a.budget > 0 else None,
+            compile_workers=workers), pipelines.COLUMNS)
 
     if "metrics" in a.sections:
         from jaxrender.bench import metrics

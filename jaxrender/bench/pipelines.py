@@ -3,13 +3,15 @@ shading counts beside it. A (scene, pipeline) that fails is kept as a row with i
 
 from __future__ import annotations
 
+import statistics
 import time
 import tomllib
+from concurrent.futures import ThreadPoolExecutor, wait
 
-from jaxrender.timing import time_first_call
+from jaxrender.timing import block
 
 # Scenes as "name" or "name:key=value,key=value" (TOML values); the 100k-triangle target scene
-# comes second, so that a time budget reaches it.
+# comes second, beside the scenes of studies/performance.toml.
 TARGET_SCENE = "many_small:n_triangles=100000,point_lights=4"
 COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "overflow")
 
@@ -48,19 +50,55 @@ def default_pipeline_specs() -> list[str]:
     return [s for n in names for s in [n] + PRESETS.get(n, [])]
 
 
-def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repeats: int = 5,
-                   deadline: float | None = None):
-    """Yield one row per (scene, pipeline); rows past ``deadline`` (time.monotonic) are skipped."""
+def time_row(call, repeats: int, budget_s: float | None = None) -> dict:
+    """A warm-up call, then up to ``repeats`` timed calls, fewer once ``budget_s`` seconds of
+    them are spent (at least one): a slow row takes fewer samples, never none. Returns
+    ``timing``'s statistics (``repeats``: the samples taken) and ``out``, the first result."""
+    t0 = time.perf_counter()
+    out = block(call())
+    first_ms = (time.perf_counter() - t0) * 1e3
+    samples, start = [], time.perf_counter()
+    for _ in range(max(1, repeats)):
+        t = time.perf_counter()
+        block(call())
+        samples.append((time.perf_counter() - t) * 1e3)
+        if budget_s is not None and time.perf_counter() - start >= budget_s:
+            break
+    median = statistics.median(samples)
+    return {"median_ms": median, "min_ms": min(samples), "max_ms": max(samples),
+            "repeats": len(samples), "compile_s": max(first_ms - median, 0.0) / 1e3, "out": out}
+
+
+def _compile_scene(scene, camera, pipeline_specs, width, height, workers: int) -> list:
+    """Each pipeline's compiled program (or the exception that stopped it), compiled side by
+    side in ``workers`` threads (XLA compiles outside the GIL) and all finished before any
+    is timed, so that no compile shares the machine with a timed call."""
     from jaxrender.pipelines import get_pipeline, make_config
+    from jaxrender.timing import compile_program
+
+    def build(spec):
+        pname, pparams = parse_spec(spec)
+        cfg = make_config(pname, width=width, height=height, **pparams)
+        return compile_program(get_pipeline(pname), scene, camera, cfg)
+
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        futures = [pool.submit(build, spec) for spec in pipeline_specs]
+        wait(futures)
+    return [f.exception() or f.result() for f in futures]
+
+
+def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repeats: int = 5,
+                   budget_s: float | None = None, compile_workers: int = 1):
+    """Yield one row per (scene, pipeline), every one of them: a failure is a row with its
+    reason in ``skipped``, a slow row takes fewer repeats (``budget_s`` per row, see
+    ``time_row``). A scene's programs compile side by side (``compile_workers`` threads;
+    ``compile_s`` is then the wall time of a compile that shared the machine with the rest),
+    then each is timed alone."""
     from jaxrender.scene import default_camera
     from jaxrender.shading import load_lit_scene
-    from jaxrender.timing import compile_program
 
     for scene_spec in scene_specs:
         base = dict(scene=scene_spec, resolution=f"{width}x{height}")
-        if deadline is not None and time.monotonic() > deadline:
-            yield dict(base, skipped="time budget spent")
-            continue
         try:
             name, params = parse_spec(scene_spec)
             t0 = time.perf_counter()
@@ -71,17 +109,13 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
         except Exception as e:  # noqa: BLE001 - a benchmark reports and goes on
             yield dict(base, skipped=f"scene: {type(e).__name__}: {e}"[:200])
             continue
-        for pipe_spec in pipeline_specs:
-            row = dict(base, pipeline=pipe_spec)
-            if deadline is not None and time.monotonic() > deadline:
-                yield dict(row, skipped="time budget spent")
-                continue
+        programs = _compile_scene(scene, camera, pipeline_specs, width, height, compile_workers)
+        for pipe_spec, comp in zip(pipeline_specs, programs):
+            row = dict(base, pipeline=pipe_spec, compile_workers=compile_workers)
             try:
-                pname, pparams = parse_spec(pipe_spec)
-                pipe = get_pipeline(pname)
-                cfg = make_config(pname, width=width, height=height, **pparams)
-                comp = compile_program(pipe, scene, camera, cfg)
-                r = time_first_call(lambda c=comp, s=scene, k=camera: c.call(s, k), repeats)
+                if isinstance(comp, BaseException):
+                    raise comp
+                r = time_row(lambda c=comp, s=scene, k=camera: c.call(s, k), repeats, budget_s)
                 frame = r.pop("out")
                 if comp.method == "aot":
                     r["compile_s"] = comp.compile_ms / 1e3
@@ -95,5 +129,5 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
             yield row
 
 
-COLUMNS = ["scene", "pipeline", "resolution", "median_ms", "min_ms", "compile_s",
+COLUMNS = ["scene", "pipeline", "resolution", "median_ms", "min_ms", "repeats", "compile_s",
            "compile_method", "shade_invocations", "overshading", "skipped"]

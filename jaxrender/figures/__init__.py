@@ -9,5 +9,6 @@ from jaxrender.figures.plots import (  # noqa: F401
     fig_pareto,
     fig_summary_table,
     fig_temporal,
+    fig_time_work,
     fig_visbuffer_waves,
 )

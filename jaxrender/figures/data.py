@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxrender.study import store
+from jaxrender.study import store, time_series
 from jaxrender.study.summary import SUMMARY_COLUMNS, summarize
 
 # aux names a pipeline may put in Frame.aux for the figures, in order of preference
@@ -262,3 +262,35 @@ def summary_table(run: Run) -> dict:
                         "time ms"],
             "rows": [[variant_name(e["pipeline"], e["params"])]
                      + [e[c] for c in SUMMARY_COLUMNS] for e in summ]}
+
+
+def time_work_tables(run: Run) -> list[tuple[str, dict]]:
+    """Per (scene, camera path) of a shader_cost sweep: each pipeline variant's (shading work,
+    time) points, its fitted line sampled over its range, and the point on it where it
+    becomes faster than deferred (``study.time_series``)."""
+    groups: dict = {}
+    for s in time_series.fit_series(run.rows):
+        groups.setdefault((s.scene, s.camera_path), []).append(s)
+    out = []
+    for (scene, path), series in sorted(groups.items()):
+        entries, crossings = [], []
+        for s in series:
+            label = variant_name(s.pipeline, s.params)
+            lo, hi = min(s.work), max(s.work)
+            line_x = np.geomspace(lo, hi, 32) if lo > 0 else np.linspace(lo, hi, 32)
+            entries.append({"label": label, "work": [w / 1e6 for w in s.work],
+                            "time": list(s.time_ms), "line_work": list(line_x / 1e6),
+                            "line_time": list(s.fit.predict(line_x)), "linear": s.fit.linear})
+            c = s.crossover
+            if c is not None and c.cost is not None and c.cost > 0:
+                w = s.invocations * (1 + c.cost)
+                crossings.append({"label": label, "cost": c.cost, "work": w / 1e6,
+                                  "time": float(s.fit.predict(w))})
+        all_work = [w for e in entries for w in e["work"] if w > 0]
+        out.append((f"{scene}__{path}", {
+            "title": f"{scene} / {path}: time against shading work", "device": run.device,
+            "xlabel": "shading work per frame (M layer evaluations: invocations x (1 + cost))",
+            "ylabel": "time per frame (ms, median)", "baseline": time_series.BASELINE,
+            "log": bool(all_work) and max(all_work) / min(all_work) > 20,
+            "series": entries, "crossings": crossings}))
+    return out

@@ -36,6 +36,9 @@ def _figure_jobs(run: data.Run, name: str) -> list[tuple[str, Callable[[], Figur
     if name == "visbuffer_waves":
         return [(f"visbuffer_waves__{s}", partial(plots.fig_visbuffer_waves, t))
                 for s, t in data.waves_tables(run)]
+    if name == "time_work":
+        return [(f"time_work__{s}", partial(plots.fig_time_work, t))
+                for s, t in data.time_work_tables(run)]
     if name == "summary_table":
         return [("summary_table", partial(plots.fig_summary_table, data.summary_table(run)))]
     raise ValueError(f"unknown figure {name!r}; known: {', '.join(FIGURES)}")

@@ -221,3 +221,36 @@ def fig_summary_table(table: dict) -> Figure:
         ax.set_title(table["title"])
         _footer(fig, table.get("device", ""))
     return fig
+
+
+def fig_time_work(table: dict) -> Figure:
+    """Frame time against shading work per pipeline variant: the measured points, the fitted
+    line (dashed where the series failed the linearity check) and a cross where a pipeline
+    becomes faster than the baseline, labelled with that shader cost.
+
+    table: {title, xlabel, ylabel, baseline, log, device, series: [{label, work, time,
+            line_work, line_time, linear}], crossings: [{label, cost, work, time}]}"""
+    with style():
+        fig = new_figure(5.0, 3.6)
+        ax = fig.subplots()
+        colours = {}
+        for s in table["series"]:
+            (pts,) = ax.plot(s["work"], s["time"], marker="o", ls="none", label=s["label"])
+            colours[s["label"]] = pts.get_color()
+            ax.plot(s["line_work"], s["line_time"], color=pts.get_color(), lw=0.9,
+                    ls="-" if s["linear"] else "--")
+        for c in table["crossings"]:
+            ax.plot([c["work"]], [c["time"]], marker="X", ms=7, color=colours.get(c["label"]),
+                    mec="black", mew=0.5, ls="none")
+            ax.annotate(f"{c['label']} < {table['baseline']}\nfrom cost {c['cost']:.3g}",
+                        (c["work"], c["time"]), xytext=(4, -10), textcoords="offset points",
+                        fontsize=5)
+        if table.get("log"):
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+        ax.set_xlabel(table["xlabel"])
+        ax.set_ylabel(table["ylabel"])
+        ax.set_title(table["title"])
+        ax.legend(loc="upper left", fontsize=5)
+        _footer(fig, table.get("device", ""))
+    return fig

@@ -6,6 +6,7 @@ One module, so that the study's tests can put small doubles in place of each pie
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 from typing import Any
 
@@ -63,11 +64,30 @@ def scene_params(name: str) -> dict | None:
 
 
 def load_scene(source: str, params: dict) -> Any:
-    """``source`` is a built-in name or a path to a scene TOML file."""
+    """``source`` is a built-in name or a path to a scene TOML file; a ``shader_cost`` in
+    ``params`` sets its shader cost (``with_shader_cost``)."""
+    params = dict(params)
+    cost = params.pop("shader_cost", None)
     try:
-        return load_lit_scene(source, **params)
+        return with_shader_cost(load_lit_scene(source, **params), cost)
     except (FileNotFoundError, TypeError, ValueError) as e:  # ValueError: a bad scene file
         raise UserError(f"scene {source!r}: {e}") from None
+
+
+def with_shader_cost(scene, cost: int | None):
+    """The scene with its ``Effects.shader_cost`` set to ``cost`` (None: unchanged)."""
+    if cost is None:
+        return scene
+    if getattr(scene, "effects", None) is None:
+        raise UserError(f"shader_cost: scene {getattr(scene, 'name', '?')!r} has no shader "
+                        "effects to set a cost on")
+    return dataclasses.replace(scene, effects=scene.effects.replace(shader_cost=int(cost)))
+
+
+def shader_cost(scene) -> int | None:
+    """The scene's shader cost, or None for a scene without effects."""
+    effects = getattr(scene, "effects", None)
+    return None if effects is None else int(effects.shader_cost)
 
 
 def default_camera(scene):

@@ -15,7 +15,11 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 from jaxrender import timing
+<<<<<<< HEAD
 from jaxrender.study import backend, compile_cache, compile_pool, executables, references
+=======
+from jaxrender.study import backend, compile_pool, references, shader_cost
+>>>>>>> time-study
 from jaxrender.study.specs import Study
 
 # Programs compiled side by side. compile_ms is the wall time of a compile that shared the
@@ -28,14 +32,28 @@ def rendered_path(study: Study, path):
     return dataclasses.replace(path, frames=path.frames + study.warmup_frames)
 
 
+def variant_scene(scene, variant):
+    """The scene as ``variant`` renders it: with the variant's ``shader_cost``, if it sets one."""
+    return backend.with_shader_cost(scene, shader_cost.split(dict(variant.params))[1])
+
+
 def compile_variant(study: Study, scene, cameras, variant, *, sequence: bool) -> timing.Compiled:
     """The variant's sequence program over ``cameras`` (the rendered path, warm-up included)
-    or, with ``sequence=False``, its single-frame program (``cameras`` one camera)."""
+    or, with ``sequence=False``, its single-frame program (``cameras`` one camera); it takes
+    ``variant_scene(scene, variant)``."""
     w, h = study.resolution
     pipe = backend.pipeline(variant.type)
+<<<<<<< HEAD
     cfg = backend.make_config(variant.type, w, h, dict(variant.params))
     return executables.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
                                        warmup_frames=study.warmup_frames if sequence else 0)
+=======
+    params, cost = shader_cost.split(dict(variant.params))
+    cfg = backend.make_config(variant.type, w, h, params)
+    scene = backend.with_shader_cost(scene, cost)
+    return timing.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
+                                  warmup_frames=study.warmup_frames if sequence else 0)
+>>>>>>> time-study
 
 
 def program_key(spec, variant, frames: int = 0) -> tuple:
@@ -59,14 +77,18 @@ class _Compiler:
         if self.procs is None:
             return self.threads.submit(fn, *args)
         study = self.study
+        params, cost = shader_cost.split(dict(params))
+        # backend.load_scene reads the cost from the scene parameters: the worker's scene
+        # cache tells the costs apart.
+        costs = () if cost is None else ((shader_cost.KEY, cost),)
         try:
             job = compile_pool.Job(
                 backend.load_scene, backend.make_cameras, spec.source,
-                tuple(dict(spec.params).items()), rendered_path(study, path),
+                tuple(dict(spec.params).items()) + costs, rendered_path(study, path),
                 tuple(study.resolution), backend.pipeline(pipe),
-                backend.make_config(pipe, *study.resolution, dict(params)),
+                backend.make_config(pipe, *study.resolution, params),
                 sequence=sequence, warmup_frames=study.warmup_frames if sequence else 0,
-                scene=self.scenes[spec.label])
+                scene=backend.with_shader_cost(self.scenes[spec.label], cost))
         except Exception:  # fn raises it again, where the thread path would
             return self.threads.submit(fn, *args)
         return self.procs.submit(label, job, lambda: fn(*args))

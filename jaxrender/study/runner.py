@@ -3,9 +3,9 @@ the cached reference, time it and append its rows; then export and summarise. Fi
 drawn afterwards from the output directory (``jaxrender.figures.draw_run_figures``).
 
 The output directory holds ``results.jsonl`` (the store), ``results.csv``, ``study.toml`` (the
-resolved config), ``environment.json`` (device, jax version, code version), ``summary.csv``
-and ``images/`` (small npz files of a few frames for the figures); the figures go to
-``figures/``.
+resolved config), ``environment.json`` (device, jax version, code version), ``summary.csv``,
+``time_fits.csv`` when the study sweeps ``shader_cost`` (``time_series``) and ``images/``
+(small npz files of a few frames for the figures); the figures go to ``figures/``.
 """
 
 from __future__ import annotations
@@ -22,9 +22,10 @@ from tqdm import tqdm
 
 from jaxrender import timing
 from jaxrender.pipelines.program import PipelineOverflow, stack_cameras
-from jaxrender.study import backend, cache, compile_cache, executables, store, summary
+from jaxrender.study import (backend, cache, compile_cache, executables, shader_cost, store,
+                             summary, time_series)
 from jaxrender.study.programs import (COMPILE_WORKERS, compile_all, compile_variant,
-                                      program_key, rendered_path)
+                                      program_key, rendered_path, variant_scene)
 from jaxrender.study.references import reference_frames
 from jaxrender.study.specs import Study, to_toml
 
@@ -41,6 +42,7 @@ class RunResult:
     summary: list
     warnings: list = field(default_factory=list)
     figures: tuple = ()  # the names of the figures to draw
+    time_fits: list = field(default_factory=list)  # time_series.Series of a shader_cost sweep
 
 
 def _slug(s: str) -> str:
@@ -100,6 +102,7 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
     w, h = study.resolution
     warm = study.warmup_frames
     cams = cams_all[warm:]
+    scene = variant_scene(scene, variant)
     seq_prog, one_prog = compiled or (
         compile_variant(study, scene, cams_all, variant, sequence=True),
         compile_variant(study, scene, cams[0], variant, sequence=False)
@@ -122,6 +125,7 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
                              f"{img.shape}, the reference is {ref.shape}")
         counts = {k: store.json_number(v[t]) for k, v in counts_t.items() if v.ndim == 1}
         counts = {k: v for k, v in counts.items() if v is not None}
+        counts.update(_work_columns(scene, counts))
         finite = bool(np.all(np.isfinite(img))) and all(
             math.isfinite(v) for v in counts.values() if isinstance(v, float))
         metrics, err = backend.frame_metrics(img, ref, study.metrics)
@@ -151,6 +155,18 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
         r.update(seq_metrics)
         r["temporal_error_frame"] = te
     return rows
+
+
+def _work_columns(scene, counts: dict) -> dict:
+    """``shader_cost`` (the scene's, as the variant renders it) and ``shading_work`` (layer
+    evaluations: shade_invocations x (1 + shader_cost)); none for a scene without effects."""
+    cost = backend.shader_cost(scene)
+    if cost is None:
+        return {}
+    out = {shader_cost.KEY: cost}
+    if isinstance(counts.get("shade_invocations"), (int, float)):
+        out[shader_cost.WORK] = shader_cost.shading_work(counts["shade_invocations"], cost)
+    return out
 
 
 def _save_frame_images(out_dir, spec, path, seq, t, row, img, err, ref, aux) -> None:
@@ -196,10 +212,16 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     summ = summary.summarize(rows)
     summary.write_summary(summ, out_dir / "summary.csv")
     log(summary.format_summary(summ))
+    fits = time_series.fit_series(rows)
+    if fits:  # the study sweeps shader_cost
+        time_series.write_csv(fits, out_dir / "time_fits.csv")
+        log("time against shading work (time_fits.csv):\n" + time_series.format_fits(fits))
+    else:  # none from an earlier run's sweep either
+        (out_dir / "time_fits.csv").unlink(missing_ok=True)
     warns = summary.convergence_warnings(study, rows)
     for w in warns:
         log(f"warning: {w}")
-    return RunResult(out_dir, rows, len(todo), skipped, summ, warns, study.figures)
+    return RunResult(out_dir, rows, len(todo), skipped, summ, warns, study.figures, fits)
 
 
 def _write_run_files(study: Study, out_dir: Path, env: dict) -> None:

@@ -5,7 +5,9 @@ expected a non-empty list``). A study composes reusable configs: scenes are buil
 scene files, camera paths may be presets and pipelines presets, each found by name in a local
 ``configs/{scenes,paths,pipelines}/`` (beside the study, or ``--configs DIR``) and then among
 the built-ins (``jaxrender.catalog``). Sweeps are explicit lists, combined as a cartesian
-product or zipped. See ``studies/quickstart.toml`` for a commented example.
+product or zipped. Every pipeline entry also takes ``shader_cost`` (an integer >= 0, in
+``params`` or ``sweep``): the scene's shader cost for its variants, in extra light layers
+(``jaxrender.study.shader_cost``). See ``studies/quickstart.toml`` for a commented example.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from jaxrender import catalog
 from jaxrender.errors import StudyError, UserError
 from jaxrender.metrics import METRICS
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
-from jaxrender.study import backend
+from jaxrender.study import backend, shader_cost
 from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
                                    ReferenceSpec, SceneSpec, Study, TimingSpec, Variant,
                                    parse_resolution)
@@ -70,8 +72,9 @@ def with_preset(ck: Checker, item: dict, path: str, local, cls, kind: str,
 
 
 def check_params(ck: Checker, path: str, ptype: str, params: dict, resolution) -> dict:
-    """Parameters of pipeline ``ptype`` checked by name and type against its config class;
-    returns them in the fields' types (lists become tuples, integers floats for floats)."""
+    """Parameters of pipeline ``ptype`` checked by name and type against its config class
+    (and ``shader_cost``, which every pipeline entry takes: ``study.shader_cost``); returns
+    them in the fields' types (lists become tuples, integers floats for floats)."""
     pipe = backend.pipeline(ptype)
     fields = {f.name: f for f in dataclasses.fields(pipe.config_cls)}
     out = {}
@@ -79,13 +82,16 @@ def check_params(ck: Checker, path: str, ptype: str, params: dict, resolution) -
         where = key_path(path, k)
         if k in ("width", "height"):
             ck.fail(where, "the resolution is set for the whole study (`resolution`)")
+        if k == shader_cost.KEY:
+            out[k] = ck.int_(v, where, lo=0)
+            continue
         if k not in fields:
             known = ", ".join(sorted(f for f in fields if f not in ("width", "height")))
             ck.fail(where, f"pipeline {ptype!r} has no parameter {k!r}; "
-                    f"its parameters are: {known or '(none)'}")
+                    f"its parameters are: {known or '(none)'} (and {shader_cost.KEY})")
         out[k] = _check_value(ck, where, v, fields[k].default)
     try:
-        backend.make_config(ptype, resolution[0], resolution[1], out)
+        backend.make_config(ptype, resolution[0], resolution[1], shader_cost.split(out)[0])
     except (TypeError, ValueError, KeyError) as e:
         ck.fail(path, f"pipeline {ptype!r} rejects these parameters: {e}")
     return out
@@ -249,7 +255,8 @@ def _pipeline(ck: Checker, item, path: str, local, resolution) -> PipelineSpec:
     variants = _variants(ck, path, label, ptype, fixed, sweep, mode)
     for v in variants:
         try:
-            backend.make_config(ptype, resolution[0], resolution[1], dict(v.params))
+            backend.make_config(ptype, resolution[0], resolution[1],
+                                shader_cost.split(dict(v.params))[0])
         except (TypeError, ValueError, KeyError) as e:
             ck.fail(f"{path}.sweep", f"pipeline {ptype!r} rejects {v.params_json}: {e}")
     return PipelineSpec(label, ptype, tuple(sorted(fixed.items())), tuple(sweep.items()),
@@ -260,6 +267,10 @@ def _reference(ck: Checker, raw, resolution) -> ReferenceSpec:
     d = read_table(ck, raw, "reference", ReferenceSpec)
     pipe = _pipeline_type(ck, d["pipeline"], "reference.pipeline")
     params = check_params(ck, "reference.params", pipe, dict(d["params"]), resolution)
+    if shader_cost.KEY in params:
+        ck.fail(f"reference.params.{shader_cost.KEY}", "the reference renders each scene with "
+                "the scene's own shader (every variant is scored against it); set the shader "
+                "cost in the pipeline entries")
     if d["check_convergence"]:
         # The check is the reference's own 2k render (its ``convergence`` parameter).
         fields = {f.name for f in dataclasses.fields(backend.pipeline(pipe).config_cls)}

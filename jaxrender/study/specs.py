@@ -20,6 +20,7 @@ FIGURES = (
     "dacs_decisions",
     "object_space_marking",
     "visbuffer_waves",
+    "time_work",
     "summary_table",
 )
 MAX_SIDE = 8192

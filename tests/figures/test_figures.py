@@ -40,6 +40,14 @@ TABLES = {
     "waves": (figures.fig_visbuffer_waves, {
         "title": "t", "labels": ["vb", "vb vrs=2x2"], "waves": [120.0, 40.0],
         "utilization": [0.9, 0.6]}),
+    "time_work": (figures.fig_time_work, {
+        "title": "t", "xlabel": "work", "ylabel": "ms", "baseline": "deferred", "log": True,
+        "device": "cpu", "series": [
+            {"label": "deferred", "work": [1.0, 5.0, 65.0], "time": [2.0, 2.4, 7.1],
+             "line_work": [1.0, 65.0], "line_time": [2.0, 7.1], "linear": True},
+            {"label": "checkerboard", "work": [0.5, 2.5, 32.5], "time": [3.0, 3.2, 5.6],
+             "line_work": [0.5, 32.5], "line_time": [3.0, 5.6], "linear": False}],
+        "crossings": [{"label": "checkerboard", "cost": 25.7, "work": 13.4, "time": 4.0}]}),
     "summary": (figures.fig_summary_table, {
         "title": "t", "columns": ["pipeline", "PSNR"], "rows": [["a", 30.123], ["b", float("nan")]]}),
 }
