@@ -15,11 +15,8 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 from jaxrender import timing
-<<<<<<< HEAD
-from jaxrender.study import backend, compile_cache, compile_pool, executables, references
-=======
-from jaxrender.study import backend, compile_pool, references, shader_cost
->>>>>>> time-study
+from jaxrender.study import (backend, compile_cache, compile_pool, executables, references,
+                             shader_cost)
 from jaxrender.study.specs import Study
 
 # Programs compiled side by side. compile_ms is the wall time of a compile that shared the
@@ -43,17 +40,11 @@ def compile_variant(study: Study, scene, cameras, variant, *, sequence: bool) ->
     ``variant_scene(scene, variant)``."""
     w, h = study.resolution
     pipe = backend.pipeline(variant.type)
-<<<<<<< HEAD
-    cfg = backend.make_config(variant.type, w, h, dict(variant.params))
-    return executables.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
-                                       warmup_frames=study.warmup_frames if sequence else 0)
-=======
     params, cost = shader_cost.split(dict(variant.params))
     cfg = backend.make_config(variant.type, w, h, params)
     scene = backend.with_shader_cost(scene, cost)
-    return timing.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
-                                  warmup_frames=study.warmup_frames if sequence else 0)
->>>>>>> time-study
+    return executables.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
+                                       warmup_frames=study.warmup_frames if sequence else 0)
 
 
 def program_key(spec, variant, frames: int = 0) -> tuple:
