@@ -24,14 +24,14 @@ from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key  # noq
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--tris", type=int, default=2_600_000)
-    ap.add_argument("--size", default="1920x1080")
+    ap.add_argument("--size", type=resolution_arg, default="1920x1080")
     ap.add_argument("--capacity", type=int, default=1 << 22)
     a = ap.parse_args(argv)
-    w, h = (int(x) for x in a.size.split("x"))
+    w, h = a.size
     clip, faces = scene(a.tris, w, h)
     n = faces.shape[0]
     cap = a.capacity
-    print(environment(), "tris", n, "size", a.size, "capacity", cap)
+    print(environment(), "tris", n, "size", f"{w}x{h}", "capacity", cap)
     with jax.enable_x64(True):
         off = jnp.asarray([128, 128], jnp.int64)
         ones, ids = jnp.ones((n,), bool), jnp.arange(n, dtype=jnp.int32)

@@ -14,17 +14,9 @@ from __future__ import annotations
 
 import argparse
 
+from jaxrender.parsing import resolution_arg
+
 SECTIONS = ("raster", "pipelines", "metrics")
-
-
-def _res(text: str) -> tuple[int, int]:
-    try:
-        w, h = (int(x) for x in text.lower().split("x"))
-        if w > 0 and h > 0:
-            return w, h
-    except ValueError:
-        pass
-    raise argparse.ArgumentTypeError(f"expected WxH, e.g. 1920x1080, got {text!r}")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -32,7 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="small sizes (a CPU smoke run) instead of the full sweeps")
     p.add_argument("--json", metavar="PATH", help="write every row and the environment here")
     p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS))
-    p.add_argument("--resolution", type=_res, help="pipelines: WxH (default 1920x1080, "
+    p.add_argument("--resolution", type=resolution_arg, help="pipelines: WxH (default 1920x1080, "
                    "quick 160x90)")
     p.add_argument("--scenes", nargs="+", metavar="SCENE",
                    help="pipelines: scenes as name or name:key=value,... (default: all built-ins "

@@ -4,27 +4,14 @@ shading counts beside it. A (scene, pipeline) that fails is kept as a row with i
 from __future__ import annotations
 
 import time
-import tomllib
 
+from jaxrender.parsing import parse_spec
 from jaxrender.timing import time_first_call
 
 # Scenes as "name" or "name:key=value,key=value" (TOML values); the 100k-triangle target scene
 # comes second, so that a time budget reaches it.
 TARGET_SCENE = "many_small:n_triangles=100000,point_lights=4"
 COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "overflow")
-
-
-def parse_spec(text: str) -> tuple[str, dict]:
-    """'name:k=v,k=v' -> (name, {k: v}) with TOML values; bare words are strings."""
-    name, _, rest = text.partition(":")
-    params = {}
-    for item in filter(None, rest.split(",")):
-        k, _, v = item.partition("=")
-        try:
-            params[k.strip()] = tomllib.loads(f"v = {v}")["v"]
-        except tomllib.TOMLDecodeError:
-            params[k.strip()] = v.strip()
-    return name.strip(), params
 
 
 def default_scene_specs() -> list[str]:
@@ -62,7 +49,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
             yield dict(base, skipped="time budget spent")
             continue
         try:
-            name, params = parse_spec(scene_spec)
+            name, params = parse_spec(scene_spec, "scene")
             t0 = time.perf_counter()
             scene = load_lit_scene(name, **params)
             camera = default_camera(scene)
@@ -77,7 +64,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
                 yield dict(row, skipped="time budget spent")
                 continue
             try:
-                pname, pparams = parse_spec(pipe_spec)
+                pname, pparams = parse_spec(pipe_spec, "pipeline")
                 pipe = get_pipeline(pname)
                 cfg = make_config(pname, width=width, height=height, **pparams)
                 comp = compile_program(pipe, scene, camera, cfg)

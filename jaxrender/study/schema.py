@@ -18,11 +18,11 @@ from pathlib import Path
 from jaxrender import catalog
 from jaxrender.errors import StudyError, UserError
 from jaxrender.metrics import METRICS
+from jaxrender.parsing import parse_resolution
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
 from jaxrender.study import backend
 from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
-                                   ReferenceSpec, SceneSpec, Study, TimingSpec, Variant,
-                                   parse_resolution)
+                                   ReferenceSpec, SceneSpec, Study, TimingSpec, Variant)
 from jaxrender.study.tables import (Checker, type_name, key_path, read_table, read_toml,
                                     shown_path)
 

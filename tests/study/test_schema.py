@@ -6,8 +6,9 @@ import textwrap
 import pytest
 
 from jaxrender.errors import StudyError, UserError
+from jaxrender.parsing import parse_resolution
 from jaxrender.study.schema import load_study
-from jaxrender.study.specs import parse_resolution, to_toml
+from jaxrender.study.specs import to_toml
 
 BASE = """
 name = "t"
