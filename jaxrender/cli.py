@@ -133,7 +133,7 @@ def cmd_pipelines(a) -> int:
 def cmd_render(a) -> int:
     import matplotlib.image
 
-    from jaxrender.figures.io import to_display
+    from jaxrender.figures.data import display_image
     from jaxrender import timing
     from jaxrender.study import backend
     from jaxrender.study.store import json_number
@@ -153,7 +153,7 @@ def cmd_render(a) -> int:
     img = np.asarray(frame.image, np.float32)
     out = Path(a.output)
     out.parent.mkdir(parents=True, exist_ok=True)
-    matplotlib.image.imsave(out, to_display(img))
+    matplotlib.image.imsave(out, display_image(img))
     counts = {k: json_number(v) for k, v in (frame.counts or {}).items()}
     counts = {k: v for k, v in counts.items() if v is not None}
     if a.json:
