@@ -57,3 +57,13 @@ def test_segment_lanes():
     starts = jnp.asarray([True, False, True, True, False, False, True])
     live = jnp.asarray([True, True, True, True, True, False, False])
     np.testing.assert_array_equal(np.asarray(segment_lanes(starts, live)), [2, 1, 2, 0, 0, 0, 0])
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "deferred", "visbuffer", "checkerboard",
+                                      "object_space"])
+def test_every_pipeline_checks_wave_size_one_way(pipeline):
+    from jaxrender.pipelines import make_config
+
+    assert make_config(pipeline, width=8, height=8, wave_size=64).wave_size == 64
+    with pytest.raises(ValueError, match="^wave_size must be 32 or 64, got 48$"):
+        make_config(pipeline, width=8, height=8, wave_size=48)
