@@ -1,6 +1,8 @@
-"""Honest time (DESIGN.md principle 9), for the study, ``jaxrender bench`` and benchmarks/:
-compile timed apart, warm-up, ``block_until_ready``, several repeats, the median; the device
-recorded beside every number.
+"""Time as the study, ``jaxrender bench`` and benchmarks/ measure it: compile timed apart (a
+first call would mix it in), warm-up, ``block_until_ready`` (JAX dispatches asynchronously, so
+a call returns before its work is done), several repeats and their median (a host's speed
+drifts within a run), and the device recorded beside every number (a time means nothing
+without it).
 """
 
 from __future__ import annotations
@@ -36,12 +38,11 @@ def environment() -> dict:
 @dataclass(frozen=True)
 class Compiled:
     """A compiled pipeline program ready to time: ``call(scene, cameras) -> Frame`` (one
-    camera, or a path for a sequence program). compile_ms is jax's lower + compile time,
-    host-side preparation (object-space sheets) included; method is ``"aot"``."""
+    camera, or a path for a sequence program), compiled ahead of time. compile_ms is jax's
+    lower + compile time, host-side preparation (object-space sheets) included."""
 
     call: Callable
     compile_ms: float
-    method: str = "aot"
 
 
 def compile_program(pipe, scene, cameras, cfg, *, sequence: bool = False,
@@ -71,7 +72,8 @@ def time_call(fn: Callable, *args, repeats: int = 3, warmup: int = 0):
     return out, statistics.median(samples), samples
 
 
-def _stats(samples_ms: list[float]) -> dict:
+def sample_stats(samples_ms: list[float]) -> dict:
+    """Median, min, max and count of timed samples (ms)."""
     return {"median_ms": statistics.median(samples_ms), "min_ms": min(samples_ms),
             "max_ms": max(samples_ms), "repeats": len(samples_ms)}
 
@@ -104,7 +106,7 @@ def time_compiled(fn, *args, repeats: int = 10, warmup: int = 2, keep_compiled: 
     compile_s = time.perf_counter() - t0
     out, _, samples = time_call(compiled, *args, repeats=repeats, warmup=warmup)
     extra = {"compiled": compiled} if keep_compiled else {}
-    return dict(_stats(samples), compile_s=compile_s, **memory_analysis(compiled), out=out,
+    return dict(sample_stats(samples), compile_s=compile_s, **memory_analysis(compiled), out=out,
                 **extra)
 
 
@@ -115,7 +117,7 @@ def time_first_call(call: Callable[[], object], repeats: int = 10) -> dict:
     block(call())
     first_ms = (time.perf_counter() - t0) * 1e3
     out, median, samples = time_call(call, repeats=repeats)
-    return dict(_stats(samples), compile_s=max(first_ms - median, 0.0) / 1e3, out=out)
+    return dict(sample_stats(samples), compile_s=max(first_ms - median, 0.0) / 1e3, out=out)
 
 
 def peak_memory() -> dict:

@@ -6,12 +6,13 @@ from __future__ import annotations
 import time
 
 from jaxrender.parsing import parse_spec
-from jaxrender.timing import time_first_call
+from jaxrender.timing import sample_stats, time_call
 
 # Scenes as "name" or "name:key=value,key=value" (TOML values); the 100k-triangle target scene
 # comes second, so that a time budget reaches it.
 TARGET_SCENE = "many_small:n_triangles=100000,point_lights=4"
-COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "overflow")
+COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "lane_utilization",
+                 "bytes_intermediate", "overflow")
 
 
 def default_scene_specs() -> list[str]:
@@ -68,11 +69,9 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
                 pipe = get_pipeline(pname)
                 cfg = make_config(pname, width=width, height=height, **pparams)
                 comp = compile_program(pipe, scene, camera, cfg)
-                r = time_first_call(lambda c=comp, s=scene, k=camera: c.call(s, k), repeats)
-                frame = r.pop("out")
-                if comp.method == "aot":
-                    r["compile_s"] = comp.compile_ms / 1e3
-                row.update(r, compile_method=comp.method)
+                frame, _, samples = time_call(comp.call, scene, camera, repeats=repeats,
+                                              warmup=1)
+                row.update(sample_stats(samples), compile_s=comp.compile_ms / 1e3)
                 counts = getattr(frame, "counts", None) or {}
                 for k in COUNT_COLUMNS:
                     if k in counts:
@@ -83,4 +82,4 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
 
 
 COLUMNS = ["scene", "pipeline", "resolution", "median_ms", "min_ms", "compile_s",
-           "compile_method", "shade_invocations", "overshading", "skipped"]
+           "shade_invocations", "overshading", "skipped"]

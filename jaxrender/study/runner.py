@@ -134,7 +134,7 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
             "sequence_frames": len(cams_all), "warmup_frames": warm,
             "compile_ms": seq_prog.compile_ms,
             "compile_ms_single": one_prog.compile_ms if one_prog else float("nan"),
-            "compile_method": seq_prog.method, "compile_workers": COMPILE_WORKERS,
+            "compile_workers": COMPILE_WORKERS,
             "finite": finite, **env,
         }
         if "convergence_psnr" in refs[t]:
