@@ -35,7 +35,7 @@ def main(argv=None) -> None:
     info = environment()
     print(f"device: {info['device']}, jax {info['jax_version']}, {w}x{h}, "
           f"median of {a.repeats} after 1 warm-up\n")
-    print_table(time_pipelines(a.scenes, a.variants, w, h, repeats=a.repeats), COLUMNS)  # streamed
+    print_table(time_pipelines(a.scenes, a.variants, w, h, repeats=a.repeats), COLUMNS)
 
 
 if __name__ == "__main__":

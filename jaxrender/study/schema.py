@@ -19,7 +19,7 @@ from jaxrender import catalog
 from jaxrender.errors import StudyError, UserError
 from jaxrender.metrics import METRICS
 from jaxrender.parsing import parse_resolution
-from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
+from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED, overridden_message
 from jaxrender.study import backend
 from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
                                    ReferenceSpec, SceneSpec, Study, TimingSpec, Variant)
@@ -190,6 +190,9 @@ def _path(ck: Checker, item, path: str, local, default_frames: int) -> PathSpec:
     for k, p in declared.items():
         if p.default is REQUIRED and k not in params:
             ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
+    for k, by in PATH_TYPES[ptype].overridden:
+        if k in params and by in params:
+            ck.fail(f"{path}.params.{k}", overridden_message(ptype, k, by))
     return PathSpec(name, ptype, d["frames"], _frozen(params), source)
 
 

@@ -144,6 +144,9 @@ MALFORMED = [
      "no camera path preset 'zoom'"),
     ("unknown path type", BASE + '[[paths]]\ntype = "spiral"\n', "paths[0].type",
      "unknown camera path type 'spiral'"),
+    ("orbit distance with center", BASE + '[[paths]]\ntype = "orbit"\nparams = { '
+     'degrees_per_frame = 1.0, distance = 2.0, center = [0, 0, 0] }\n',
+     "paths[0].params.distance", "'distance' has no effect when 'center' is given"),
     ("path frames negative", BASE + '[[paths]]\ntype = "static"\nframes = -2\n',
      "paths[0].frames", ">= 1"),
     ("unknown reference key", BASE + "[reference]\nk = 8\n", "reference.k", "unknown key"),
