@@ -16,7 +16,6 @@ import argparse
 import collections
 import glob
 import os
-import sys
 import tempfile
 import time
 
@@ -24,8 +23,6 @@ import jax
 
 from jaxrender.parsing import parse_settings, parse_spec, resolution_arg
 from jaxrender.timing import device_description
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 _HOST_NOISE = ("ThreadpoolListener", "end: ", "ThunkExecutor", "$", "PjitFunction")
 
@@ -147,11 +144,10 @@ def main(argv=None) -> int:
     w, h = args.resolution
     print(f"device: {device_description()}, jax {jax.__version__}")
     if args.what == "raster":
-        from bench_raster import scene, static_args
-
+        from jaxrender.bench.raster import static_args, terrain_clip
         from jaxrender.raster.rasterize import rasterize_traced
 
-        clip, faces = scene(args.triangles, w, h)
+        clip, faces = terrain_clip(args.triangles, w, h)
         fn = jax.jit(lambda c, f: rasterize_traced(c, f, **static_args(faces.shape[0], w, h),
                                              traversal=args.traversal))
         profile_call(fn, clip, faces, calls=args.calls, top=args.top,

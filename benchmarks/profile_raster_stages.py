@@ -6,19 +6,16 @@
 from __future__ import annotations
 
 import argparse
-import os
-import sys
 
 import jax
 import jax.numpy as jnp
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_raster import scene  # noqa: E402
-from jaxrender.timing import environment, time_compiled  # noqa: E402
-
-from jaxrender.raster.resolve import resolve  # noqa: E402
-from jaxrender.raster.setup import setup_triangles  # noqa: E402
-from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key  # noqa: E402
+from jaxrender.bench.raster import terrain_clip
+from jaxrender.parsing import resolution_arg
+from jaxrender.raster.resolve import resolve
+from jaxrender.raster.setup import setup_triangles
+from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key
+from jaxrender.timing import environment, time_compiled
 
 
 def main(argv=None):
@@ -28,7 +25,7 @@ def main(argv=None):
     ap.add_argument("--capacity", type=int, default=1 << 22)
     a = ap.parse_args(argv)
     w, h = a.size
-    clip, faces = scene(a.tris, w, h)
+    clip, faces = terrain_clip(a.tris, w, h)
     n = faces.shape[0]
     cap = a.capacity
     print(environment(), "tris", n, "size", f"{w}x{h}", "capacity", cap)

@@ -120,6 +120,41 @@ def time_first_call(call: Callable[[], object], repeats: int = 10) -> dict:
     return dict(sample_stats(samples), compile_s=max(first_ms - median, 0.0) / 1e3, out=out)
 
 
+def time_interleaved(steps: dict[str, Callable], repeats: int, rounds: int = 10,
+                     warmup: int = 3) -> tuple[dict, dict]:
+    """Median ms of ``state = step(state)`` for each named step (the state starts as None:
+    a frame loop can hand each frame's buffers to the next), the steps taking turns over
+    ``rounds`` rounds of ``repeats // rounds`` calls: a call of well under a millisecond is
+    host-bound, and the host's speed drifts within a run. Returns the medians and each
+    step's last state."""
+    state = dict.fromkeys(steps)
+    for name, step in steps.items():
+        for _ in range(warmup):
+            state[name] = block(step(state[name]))
+    samples = {name: [] for name in steps}
+    for _ in range(rounds):
+        for name, step in steps.items():
+            for _ in range(max(1, repeats // rounds)):
+                t0 = time.perf_counter()
+                state[name] = block(step(state[name]))
+                samples[name].append((time.perf_counter() - t0) * 1e3)
+    return {name: statistics.median(v) for name, v in samples.items()}, state
+
+
+def time_batched(fn: Callable, *args, calls: int, repeats: int = 3) -> float:
+    """Median ms per call of ``calls`` calls dispatched back to back with one wait at the end:
+    the throughput a loop that never waits for a frame reaches."""
+    per = []
+    for _ in range(repeats):
+        block(fn(*args))
+        t0 = time.perf_counter()
+        outs = [fn(*args) for _ in range(calls)]
+        block(outs)
+        per.append((time.perf_counter() - t0) * 1e3 / calls)
+        del outs
+    return statistics.median(per)
+
+
 def peak_memory() -> dict:
     """Peak and current MiB on device 0 since the process started (None where the backend
     keeps no statistics, as the CPU does). JAX cannot reset the peak, so a section's peak is

@@ -5,7 +5,7 @@ and peak device memory, printed as markdown tables and written as JSON.
     jaxrender bench --json bench.json          # the full sweeps (for the GPU)
     python -m jaxrender.bench --sections raster --json raster.json
 
-The raster sweeps use the terrain of ``benchmarks/bench_raster.py`` (same mesh and camera);
+The raster sweeps draw the benchmark terrain (``bench.raster.terrain_clip``);
 pipelines run on every built-in scene from its default camera; every row carries its compile
 time apart from its steady-state median. This module imports nothing heavy until ``run``.
 """

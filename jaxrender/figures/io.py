@@ -8,7 +8,6 @@ from pathlib import Path
 
 import matplotlib
 import matplotlib.style
-import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
