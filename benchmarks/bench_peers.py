@@ -104,7 +104,8 @@ def time_jaxrender(clip, faces, width, height, repeats, draws):
     and the VisBuffer of the last single call."""
     out, steps = {}, {}
     static = static_args(faces.shape[0], width, height)
-    for suffix, bary, entry in (("", True, rasterize_clip), ("_depth", False, rasterize_depth_clip)):
+    outputs = (("", True, rasterize_clip), ("_depth", False, rasterize_depth_clip))
+    for suffix, bary, entry in outputs:
         t0 = time.perf_counter()
         compiled = rasterize_program.lower(clip, faces, barycentrics=bary, **static).compile()
         out[f"jaxrender{suffix}_compile_s"] = time.perf_counter() - t0

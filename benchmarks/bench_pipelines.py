@@ -4,7 +4,8 @@ with the device and JAX version, and the shading counts beside the times.
 
     python benchmarks/bench_pipelines.py --scenes foliage room many_small --resolution 320x180 \
         --repeats 10
-    python benchmarks/bench_pipelines.py --variants forward forward:z_prepass=true visbuffer:vrs=fixed
+    python benchmarks/bench_pipelines.py --variants forward forward:z_prepass=true \
+        visbuffer:vrs=fixed
 """
 
 from __future__ import annotations

@@ -5,9 +5,9 @@
     python benchmarks/bench_raster.py --preset tiny --brute-size 64x36   # a CPU smoke run
 
 Scenes are the benchmark terrain (``jaxrender.bench.raster.terrain_clip``: a heightfield seen
-from above at an angle, so triangle sizes vary across the image), as in ``jaxrender bench``. Also times a brute-force rasterizer (every pixel
-tests every triangle) on 2.5k triangles to show the gap, and on a GPU checks that the GPU's
-triangle ids equal the CPU's.
+from above at an angle, so triangle sizes vary across the image), as in ``jaxrender bench``.
+Also times a brute-force rasterizer (every pixel tests every triangle) on 2.5k triangles to show
+the gap, and on a GPU checks that the GPU's triangle ids equal the CPU's.
 """
 
 from __future__ import annotations
