@@ -190,9 +190,13 @@ def _path(ck: Checker, item, path: str, local, default_frames: int) -> PathSpec:
     for k, p in declared.items():
         if p.default is REQUIRED and k not in params:
             ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
+    own = item.get("params", {})  # the entry's own, a table by now
     for k, by in PATH_TYPES[ptype].overridden:
         if k in params and by in params:
-            ck.fail(f"{path}.params.{k}", overridden_message(ptype, k, by))
+            if by in own and k not in own:  # the entry's key replaces what its preset set
+                del params[k]
+            else:
+                ck.fail(f"{path}.params.{k}", overridden_message(ptype, k, by))
     return PathSpec(name, ptype, d["frames"], _frozen(params), source)
 
 

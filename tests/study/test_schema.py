@@ -70,6 +70,16 @@ def test_presets_compose(fake):
     assert s.scenes[0].params == (("n", 3),)
 
 
+def test_orbit_center_over_a_preset_that_sets_distance(fake):
+    """A preset's distance gives way to the entry's own center (the one that would be
+    ignored is dropped); both in the entry itself are refused (MALFORMED)."""
+    (fake / "configs" / "paths" / "round.toml").write_text(
+        'type = "orbit"\n[params]\ndegrees_per_frame = 2.0\ndistance = 3.0\n')
+    s = load_study(_write(fake, BASE + '[[paths]]\npreset = "round"\n'
+                          'params = { center = [0, 1, 0] }\n'))
+    assert dict(s.paths[0].params) == {"degrees_per_frame": 2.0, "center": (0, 1, 0)}
+
+
 def test_overrides_and_round_trip(fake, tmp_path):
     s = load_study(_write(fake, BASE + 'sweep = { levels = [2, 4] }\n'
                           '[[paths]]\npreset = "slowpan"\n'))
