@@ -13,7 +13,6 @@ NumPy) run frame by frame on the host on --lib-frames frames, median per frame r
 from __future__ import annotations
 
 import argparse
-import platform
 import statistics
 
 import jax
@@ -21,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender import metrics
-from jaxrender.timing import time_call, time_first_call
+from jaxrender.timing import environment, time_call, time_first_call
 
 
 def _time_jax(fn, repeats):
@@ -78,7 +77,7 @@ def _library_calls(ref_np, test_np):
     return calls
 
 
-def main(argv=None):
+def parse_args(argv=None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--width", type=int, default=1920)
     p.add_argument("--height", type=int, default=1080)
@@ -90,25 +89,24 @@ def main(argv=None):
     p.add_argument("--impl", choices=("slices", "conv"), default=metrics.correlate_impl(),
                    help="separable filter implementation (SSIM, FLIP)")
     p.add_argument("--only", nargs="*", default=None, help="subset of metric keys")
-    args = p.parse_args(argv)
-    metrics.set_correlate_impl(args.impl)
-    dtype = np.dtype(args.dtype)
+    return p.parse_args(argv)
 
-    dev = jax.devices()[0]
-    print(f"jax {jax.__version__}, backend {jax.default_backend()}, device {dev.device_kind} "
-          f"({dev}), host {platform.processor() or platform.machine()}, dtype {dtype}, "
-          f"filters {args.impl}")
-    h, w, n = args.height, args.width, max(args.frames, 1)
 
+def frames(w: int, h: int, n: int):
+    """(reference, test) batches of n random (h, w, 3) frames, the test a clipped noisy copy,
+    and the (n - 1) sample positions a warp error reads the test at."""
     key_a, key_b = jax.random.split(jax.random.PRNGKey(0))
     ref = jax.random.uniform(key_a, (n, h, w, 3), jnp.float32)
     test = jnp.clip(ref + 0.05 * jax.random.normal(key_b, (n, h, w, 3), jnp.float32), 0.0, 1.0)
     jax.block_until_ready((ref, test))
-    ref1, test1 = ref[0], test[0]
     pos = jnp.broadcast_to(
         jnp.stack(jnp.meshgrid(jnp.arange(w) + 0.5, jnp.arange(h) + 0.5), -1) + 0.25,
         (max(n - 1, 1), h, w, 2)).astype(jnp.float32)
+    return ref, test, pos
 
+
+def metric_cases(dtype, pos, only) -> tuple[dict, dict]:
+    """The per-image and the sequence metrics timed, as ``fn(reference, test)``."""
     cases = {
         "psnr": lambda r, t: metrics.psnr(r, t, dtype=dtype),
         "ssim": lambda r, t: metrics.ssim(r, t, dtype=dtype),
@@ -121,10 +119,17 @@ def main(argv=None):
         "temporal_error": lambda r, t: metrics.temporal_error(t, r, dtype=dtype),
         "warp_error": lambda r, t: metrics.warp_error(t, r, pos[: r.shape[0] - 1], dtype=dtype),
     }
-    if args.only:
-        cases = {k: v for k, v in cases.items() if k in args.only}
-        seq_cases = {k: v for k, v in seq_cases.items() if k in args.only}
+    if only:
+        cases = {k: v for k, v in cases.items() if k in only}
+        seq_cases = {k: v for k, v in seq_cases.items() if k in only}
+    return cases, seq_cases
 
+
+def jax_rows(cases, seq_cases, ref, test, args) -> list[tuple]:
+    """(metric, "jaxrender", frames, compile s, ms per call, ms per frame) of one frame and of
+    the batch; the sequence metrics on the batch only."""
+    n = ref.shape[0]
+    ref1, test1 = ref[0], test[0]  # sliced once, outside the timed calls
     rows = []
     for name, fn in cases.items():
         med, comp = _time_jax(lambda: fn(ref1, test1), args.repeats)
@@ -137,27 +142,49 @@ def main(argv=None):
         if args.frames > 1:
             med, comp = _time_jax(lambda: fn(ref, test), args.repeats)
             rows.append((name, "jaxrender", str(n), comp, med * 1e3, med * 1e3 / (n - 1)))
+    return rows
 
-    if args.lib_frames > 0:
-        k = min(args.lib_frames, n)
-        ref_np, test_np = np.asarray(ref[:k]), np.asarray(test[:k])
-        for name, (label, call) in _library_calls(ref_np, test_np).items():
-            if name in cases:
-                per = _time_lib(call, k, args.lib_repeats)
-                rows.append((name, label, "1", float("nan"), per * 1e3, per * 1e3))
-                print(f"  {label}: done", flush=True)
 
+def library_rows(cases, ref, test, args) -> list[tuple]:
+    """The reference libraries' rows, frame by frame on the host, for the metrics timed."""
+    rows = []
+    k = min(args.lib_frames, ref.shape[0])
+    ref_np, test_np = np.asarray(ref[:k]), np.asarray(test[:k])
+    for name, (label, call) in _library_calls(ref_np, test_np).items():
+        if name in cases:
+            per = _time_lib(call, k, args.lib_repeats)
+            rows.append((name, label, "1", float("nan"), per * 1e3, per * 1e3))
+            print(f"  {label}: done", flush=True)
+    return rows
+
+
+def print_rows(rows, w: int, h: int, repeats: int) -> None:
     lib_per_frame = {r[0]: r[5] for r in rows if r[1] != "jaxrender"}
-    print(f"\n{w}x{h} RGB, {args.repeats} repeats (median), compile = first call - median\n")
+    print(f"\n{w}x{h} RGB, {repeats} repeats (median), compile = first call - median\n")
     print("| metric | implementation | frames | compile (s) | median per call (ms) "
           "| per frame (ms) | speed-up vs library |")
     print("|---|---|---:|---:|---:|---:|---:|")
-    for name, impl, frames, comp, call_ms, frame_ms in rows:
+    for name, impl, n_frames, comp, call_ms, frame_ms in rows:
         comp_s = "" if np.isnan(comp) else f"{comp:.2f}"
         lib = lib_per_frame.get(name)
         speed = f"{lib / frame_ms:.1f}x" if lib and impl == "jaxrender" else ""
-        print(f"| {name} | {impl} | {frames} | {comp_s} | {call_ms:.2f} | {frame_ms:.2f} "
+        print(f"| {name} | {impl} | {n_frames} | {comp_s} | {call_ms:.2f} | {frame_ms:.2f} "
               f"| {speed} |")
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    metrics.set_correlate_impl(args.impl)
+    dtype = np.dtype(args.dtype)
+    env = environment()
+    print(f"{env['device']}, jax {env['jax_version']}, dtype {dtype}, filters {args.impl}")
+    w, h = args.width, args.height
+    ref, test, pos = frames(w, h, max(args.frames, 1))
+    cases, seq_cases = metric_cases(dtype, pos, args.only)
+    rows = jax_rows(cases, seq_cases, ref, test, args)
+    if args.lib_frames > 0:
+        rows += library_rows(cases, ref, test, args)
+    print_rows(rows, w, h, args.repeats)
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from jaxrender.parsing import resolution_arg
 from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.pipelines import object_space as osp
 from jaxrender.scene.builtin import builtin_scene
@@ -31,13 +32,13 @@ def _time(fn, repeats):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--size", default="128x72")
+    ap.add_argument("--size", type=resolution_arg, default="128x72")
     ap.add_argument("--scenes", default="stripes,spheres,room,terrain")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--store-per-pixel", default="6,1",
                     help="store capacities to try, in shadels per pixel")
     a = ap.parse_args(argv)
-    w, h = (int(v) for v in a.size.split("x"))
+    w, h = a.size
     print(f"device: {device_description()}, {w}x{h}\n")
     print("| scene | store/px | sheets (res, source) | sheet build s | covered px | shadels/px "
           "| shaded | chunk fill | trilinear x | MIP chain mem x | bias | os ms | compile s "

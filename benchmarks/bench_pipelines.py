@@ -2,50 +2,41 @@
 AOT compile timed apart, warm-up, block_until_ready, median of repeats). Prints a markdown table
 with the device and JAX version, and the shading counts beside the times.
 
-    python benchmarks/bench_pipelines.py --scenes foliage room many_small --width 320 \
-        --height 180 --repeats 10
-    python benchmarks/bench_pipelines.py --variants forward forward:z_prepass=true visbuffer:vrs=fixed
+    python benchmarks/bench_pipelines.py --scenes foliage room many_small --resolution 320x180 \
+        --repeats 10
+    python benchmarks/bench_pipelines.py --variants forward forward:z_prepass=true \
+        visbuffer:vrs=fixed
 """
 
 from __future__ import annotations
 
 import argparse
 
-from jaxrender.bench.pipelines import parse_spec as parse_variant
-from jaxrender.pipelines import get_pipeline, make_config, program
-from jaxrender.shading import load_lit_scene
-from jaxrender.timing import environment, time_call
+from jaxrender.bench.pipelines import time_pipelines
+from jaxrender.bench.report import print_table
+from jaxrender.parsing import resolution_arg
+from jaxrender.timing import environment
 
 DEFAULT_VARIANTS = ("forward", "forward:z_prepass=true", "deferred", "visbuffer",
                     "visbuffer:vrs=fixed")
+COLUMNS = ["scene", "pipeline", "median_ms", "compile_s", "shade_invocations", "helper_lanes",
+           "overshading", "waves", "lane_utilization", "bytes_intermediate", "skipped"]
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scenes", nargs="+", default=["foliage", "room", "spheres"])
-    ap.add_argument("--variants", nargs="+", default=list(DEFAULT_VARIANTS))
-    ap.add_argument("--width", type=int, default=160)
-    ap.add_argument("--height", type=int, default=90)
+    ap.add_argument("--scenes", nargs="+", default=["foliage", "room", "spheres"],
+                    help="names or name:key=value,...")
+    ap.add_argument("--variants", nargs="+", default=list(DEFAULT_VARIANTS),
+                    help="pipelines as names or name:key=value,...")
+    ap.add_argument("--resolution", type=resolution_arg, default="160x90")
     ap.add_argument("--repeats", type=int, default=5)
     a = ap.parse_args(argv)
+    w, h = a.resolution
     info = environment()
-    print(f"device: {info['device']}, jax {info['jax_version']}, {a.width}x{a.height}, "
+    print(f"device: {info['device']}, jax {info['jax_version']}, {w}x{h}, "
           f"median of {a.repeats} after 1 warm-up\n")
-    print("| scene | pipeline | frame ms | compile ms | invocations | helper lanes | "
-          "overshading | waves | lane util | bytes |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-    for scene_name in a.scenes:
-        scene = load_lit_scene(scene_name)
-        for variant in a.variants:
-            name, params = parse_variant(variant)
-            cfg = make_config(name, width=a.width, height=a.height, **params)
-            call, compile_ms = program.compile(get_pipeline(name), scene, scene.camera, cfg)
-            frame, ms, _ = time_call(call, scene, scene.camera, repeats=a.repeats, warmup=1)
-            c = {k: float(v) for k, v in frame.counts.items()}
-            print(f"| {scene_name} | {variant} | {ms:.2f} | {compile_ms:.0f} | "
-                  f"{c['shade_invocations']:.0f} | {c['helper_lanes']:.0f} | "
-                  f"{c['overshading']:.3f} | {c['waves']:.0f} | {c['lane_utilization']:.3f} | "
-                  f"{c['bytes_intermediate']:.0f} |", flush=True)
+    print_table(time_pipelines(a.scenes, a.variants, w, h, repeats=a.repeats), COLUMNS)
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ import numpy as np
 from jaxrender import parallel
 from jaxrender.bench.raster import terrain_camera
 from jaxrender.bench.report import dump, print_table
+from jaxrender.parsing import resolution_arg
 from jaxrender.timing import environment, time_first_call
 from jaxrender.raster import rasterize
 from jaxrender.scene.camera_path import frame, orbit
@@ -107,7 +108,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", default="terrain", help="built-in scene for the pipeline cases")
     ap.add_argument("--pipelines", nargs="*", default=["forward", "visbuffer"])
-    ap.add_argument("--resolution", default="1920x1080")
+    ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--frames", type=int, default=16, help="frames of the orbit camera path")
     ap.add_argument("--chunk", type=int, default=8, help="frames per device per call")
     ap.add_argument("--raster-triangles", type=int, default=655_000,
@@ -116,7 +117,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--json")
     a = ap.parse_args(argv)
-    width, height = (int(x) for x in a.resolution.split("x"))
+    width, height = a.resolution
     env = environment()
     print(f"{env}\n{jax.device_count()} device(s): {jax.devices()}\n", flush=True)
     cols = ["case", "mode", "devices", "frames", "ms_per_frame", "total_ms", "compile_s",

@@ -27,11 +27,11 @@ import jax
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from jaxrender.bench.report import print_table  # noqa: E402
+from jaxrender.parsing import resolution_arg  # noqa: E402
 from jaxrender.timing import environment, time_call  # noqa: E402
 from jaxrender.pipelines import list_pipelines, make_config, program  # noqa: E402
 from jaxrender.scene.camera_path import pan  # noqa: E402
 from jaxrender.shading import load_lit_scene  # noqa: E402
-from jaxrender.study.specs import parse_resolution  # noqa: E402
 
 
 def _compile_both(pipe, scene, path, cfg):
@@ -52,13 +52,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", nargs="+", default=["terrain", "foliage"])
     ap.add_argument("--pipelines", nargs="+", default=None, help="default: every registered")
-    ap.add_argument("--resolution", default="1920x1080")
+    ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--frames", type=int, default=60)
     ap.add_argument("--pixels-per-frame", type=float, default=1.0)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--json", default=None, help="write the rows here")
     a = ap.parse_args(argv)
-    w, h = parse_resolution(a.resolution)
+    w, h = a.resolution
     names = a.pipelines or [p.name for p in list_pipelines()]
     env = environment()
     print(f"# {env}", flush=True)
@@ -92,7 +92,7 @@ def main(argv=None) -> int:
                 rows.append({"scene": sname, "pipeline": name,
                              "error": f"{type(e).__name__}: {e}"[:160]})
             print(json.dumps(rows[-1]), flush=True)
-    print(f"\n{a.resolution}, {a.frames}-frame pan ({a.pixels_per_frame} px/frame), "
+    print(f"\n{w}x{h}, {a.frames}-frame pan ({a.pixels_per_frame} px/frame), "
           f"{a.rounds} rounds; {env['device']}, jax {env['jax_version']}, "
           f"{time.strftime('%Y-%m-%d')}\n")
     print_table(rows, ["scene", "pipeline", "sequence_ms_per_frame", "single_ms", "ratio",

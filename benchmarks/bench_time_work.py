@@ -20,16 +20,12 @@ import time
 import jax
 import numpy as np
 
+from jaxrender.parsing import parse_spec, resolution_arg
 from jaxrender.timing import device_description, time_call
 
 DEFAULT_PIPELINES = ("visibility", "forward", "forward:z_prepass=true", "deferred", "visbuffer",
                      "checkerboard", "dacs", "object_space", "reference")
 SINGLE_COST = ("visibility", "reference")  # measured at the first cost only
-
-
-def parse_resolution(text: str) -> tuple[int, int]:
-    w, _, h = text.lower().partition("x")
-    return int(w), int(h)
 
 
 def visibility_program(scene, camera, cfg):
@@ -40,7 +36,6 @@ def visibility_program(scene, camera, cfg):
 
 def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repeats: int):
     """One row: median and min ms of the steady-state frame, compile seconds, counts."""
-    from jaxrender.bench.pipelines import parse_spec
     from jaxrender.pipelines import get_pipeline, make_config
     from jaxrender.pipelines import program
     from jaxrender.scene import default_camera
@@ -48,7 +43,7 @@ def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repe
 
     scene = load_lit_scene(scene_name, effects={"shader_cost": cost})
     camera = default_camera(scene)
-    name, params = parse_spec(spec)
+    name, params = parse_spec(spec, "--pipelines")
     row = dict(scene=scene_name, pipeline=spec, shader_cost=cost, resolution=f"{width}x{height}")
     t0 = time.perf_counter()
     if name == "visibility":
@@ -90,13 +85,13 @@ def main(argv=None) -> int:
     ap.add_argument("--scenes", nargs="+", default=["foliage", "terrain"])
     ap.add_argument("--pipelines", nargs="+", default=list(DEFAULT_PIPELINES))
     ap.add_argument("--costs", nargs="+", type=int, default=[0, 8, 32])
-    ap.add_argument("--resolution", default="1920x1080")
+    ap.add_argument("--resolution", type=resolution_arg, default=(1920, 1080))
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--budget", type=float, default=0.0, help="seconds; 0: no limit")
     ap.add_argument("--out", default="time_work.jsonl")
     ap.add_argument("--label", default="", help="a tag written into every row (e.g. 'before')")
     a = ap.parse_args(argv)
-    w, h = parse_resolution(a.resolution)
+    w, h = a.resolution
     t_start = time.time()
     print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)
     rows = []

@@ -71,14 +71,14 @@ if [ -n "${QUICK:-}" ]; then  # tiny sizes: checks the plumbing on a CPU
   step peers 300 python3 benchmarks/bench_peers.py --tiny --repeats 2 --draws 3 --jaxrender-repeats 5 --json "$OUT/peers.json"
   step scale 400 python3 benchmarks/bench_scale.py --resolution 48x27 --frames 2 --chunk 1 --repeats 1 --raster-triangles 2000 --pipelines forward --sweep 0 --scene spheres --json "$OUT/scale.json"
   step bench 400 python3 -m jaxrender.bench --quick --sections raster pipelines --pipelines forward --json "$OUT/bench.json"
-  [ -f benchmarks/bench_pipelines.py ] && step pipelines 300 python3 benchmarks/bench_pipelines.py --scenes spheres --variants forward --width 32 --height 18 --repeats 1
+  [ -f benchmarks/bench_pipelines.py ] && step pipelines 300 python3 benchmarks/bench_pipelines.py --scenes spheres --variants forward --resolution 32x18 --repeats 1
 else
   step raster "${RASTER_S:-110}" python3 benchmarks/bench_raster.py --preset gpu --repeats 100 --brute-size 1920x1080 --json "$OUT/raster.json"
   step metrics "${METRICS_S:-75}" python3 benchmarks/bench_metrics.py --width 1920 --height 1080 --frames 60 --repeats 5 --lib-frames 2
   step peers "${PEERS_S:-90}" env XLA_PYTHON_CLIENT_MEM_FRACTION=0.6 python3 benchmarks/bench_peers.py --repeats 10 --draws 50 --json "$OUT/peers.json"
   step scale "${SCALE_S:-70}" python3 benchmarks/bench_scale.py --resolution 1920x1080 --frames 16 --chunk 8 --repeats 3 --pipelines forward --sweep 8 --json "$OUT/scale.json"
   step bench "${BENCH_S:-130}" python3 -m jaxrender.bench --sections raster pipelines --resolution 1920x1080 --repeats 10 --budget $(( ${BENCH_S:-130} - 25 )) --json "$OUT/bench.json"
-  [ -f benchmarks/bench_pipelines.py ] && step pipelines "${PIPELINES_S:-40}" python3 benchmarks/bench_pipelines.py --width 1920 --height 1080 --repeats 10
+  [ -f benchmarks/bench_pipelines.py ] && step pipelines "${PIPELINES_S:-40}" python3 benchmarks/bench_pipelines.py --resolution 1920x1080 --repeats 10
 fi
 note "all done; files: $(ls "$OUT" | tr '\n' ' ')"
 exit 0

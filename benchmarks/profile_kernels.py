@@ -16,15 +16,13 @@ import argparse
 import collections
 import glob
 import os
-import sys
 import tempfile
 import time
 
 import jax
 
+from jaxrender.parsing import parse_settings, parse_spec, resolution_arg
 from jaxrender.timing import device_description
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 _HOST_NOISE = ("ThreadpoolListener", "end: ", "ThunkExecutor", "$", "PjitFunction")
 
@@ -133,7 +131,7 @@ def device_span_ms(events, calls: int) -> float:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("what", help="'raster' or a pipeline name (forward, deferred, ...)")
-    ap.add_argument("--resolution", default="1920x1080")
+    ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--triangles", type=int, default=164_000, help="terrain size for 'raster'")
     ap.add_argument("--scene", default="terrain",
                     help="scene for a pipeline, 'name' or 'name:key=value,...'")
@@ -143,29 +141,27 @@ def main(argv=None) -> int:
     ap.add_argument("--calls", type=int, default=5)
     ap.add_argument("--top", type=int, default=15)
     args = ap.parse_args(argv)
-    w, h = (int(v) for v in args.resolution.lower().split("x"))
+    w, h = args.resolution
     print(f"device: {device_description()}, jax {jax.__version__}")
     if args.what == "raster":
-        from bench_raster import scene, static_args
-
+        from jaxrender.bench.raster import static_args, terrain_clip
         from jaxrender.raster.rasterize import rasterize_traced
 
-        clip, faces = scene(args.triangles, w, h)
+        clip, faces = terrain_clip(args.triangles, w, h)
         fn = jax.jit(lambda c, f: rasterize_traced(c, f, **static_args(faces.shape[0], w, h),
                                              traversal=args.traversal))
         profile_call(fn, clip, faces, calls=args.calls, top=args.top,
                      label=f"raster {w}x{h} {faces.shape[0]} triangles ({args.traversal})")
         return 0
-    from jaxrender.bench.pipelines import parse_spec
     from jaxrender.pipelines import get_pipeline, make_config
     from jaxrender.scene import default_camera
     from jaxrender.shading import load_lit_scene
 
-    name, params = parse_spec(args.scene)
+    name, params = parse_spec(args.scene, "--scene")
     sc = load_lit_scene(name, **params)
     cam = default_camera(sc)
     pipe = get_pipeline(args.what)
-    _, overrides = parse_spec(args.what + ":" + ",".join(args.set))  # TOML values
+    overrides = parse_settings(args.set, "--set")
     cfg = make_config(args.what, width=w, height=h, **overrides)
     label = f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}"
     if pipe.prepares:  # object_space: charts built on the host, outside

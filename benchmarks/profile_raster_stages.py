@@ -6,32 +6,29 @@
 from __future__ import annotations
 
 import argparse
-import os
-import sys
 
 import jax
 import jax.numpy as jnp
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_raster import scene  # noqa: E402
-from jaxrender.timing import environment, time_compiled  # noqa: E402
-
-from jaxrender.raster.resolve import resolve  # noqa: E402
-from jaxrender.raster.setup import setup_triangles  # noqa: E402
-from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key  # noqa: E402
+from jaxrender.bench.raster import terrain_clip
+from jaxrender.parsing import resolution_arg
+from jaxrender.raster.resolve import resolve
+from jaxrender.raster.setup import setup_triangles
+from jaxrender.raster.work_items import EMPTY_KEY, chunk_items, depth_key
+from jaxrender.timing import environment, time_compiled
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--tris", type=int, default=2_600_000)
-    ap.add_argument("--size", default="1920x1080")
+    ap.add_argument("--size", type=resolution_arg, default="1920x1080")
     ap.add_argument("--capacity", type=int, default=1 << 22)
     a = ap.parse_args(argv)
-    w, h = (int(x) for x in a.size.split("x"))
-    clip, faces = scene(a.tris, w, h)
+    w, h = a.size
+    clip, faces = terrain_clip(a.tris, w, h)
     n = faces.shape[0]
     cap = a.capacity
-    print(environment(), "tris", n, "size", a.size, "capacity", cap)
+    print(environment(), "tris", n, "size", f"{w}x{h}", "capacity", cap)
     with jax.enable_x64(True):
         off = jnp.asarray([128, 128], jnp.int64)
         ones, ids = jnp.ones((n,), bool), jnp.arange(n, dtype=jnp.int32)

@@ -15,20 +15,12 @@ from pathlib import Path
 from jaxrender import catalog
 from jaxrender.bench import add_arguments as bench_arguments  # argparse only: no jax yet
 from jaxrender.errors import StudyError, UserError
+from jaxrender.parsing import parse_settings, resolution_arg
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, status 2
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
-
-
-def _resolution(text: str):
-    from jaxrender.study.specs import parse_resolution
-
-    try:
-        return parse_resolution(text, "--resolution")
-    except UserError as e:
-        raise argparse.ArgumentTypeError(str(e).split(": ", 1)[1]) from None
 
 
 def _positive(text: str) -> int:
@@ -138,24 +130,10 @@ def cmd_pipelines(a) -> int:
     return 0
 
 
-def _parse_sets(items) -> dict:
-    out = {}
-    for item in items or ():
-        if "=" not in item:
-            raise UserError(f"--set {item!r}: expected key=value")
-        k, v = item.split("=", 1)
-        k = k.strip()
-        try:
-            out[k] = tomllib.loads(f"v = {v}")["v"]
-        except tomllib.TOMLDecodeError:
-            out[k] = v  # a bare word is a string
-    return out
-
-
 def cmd_render(a) -> int:
     import matplotlib.image
 
-    from jaxrender.figures.io import to_display
+    from jaxrender.figures.data import display_image
     from jaxrender import timing
     from jaxrender.study import backend
     from jaxrender.study.store import json_number
@@ -163,7 +141,7 @@ def cmd_render(a) -> int:
     from jaxrender.study.tables import Checker
 
     w, h = a.resolution or (320, 180)
-    params = check_params(Checker("--set"), "", a.pipeline, _parse_sets(a.set), (w, h))
+    params = check_params(Checker("--set"), "", a.pipeline, parse_settings(a.set, "--set"), (w, h))
     scene = backend.load_scene(a.scene, {})
     camera = backend.default_camera(scene)
     pipe = backend.pipeline(a.pipeline)
@@ -175,7 +153,7 @@ def cmd_render(a) -> int:
     img = np.asarray(frame.image, np.float32)
     out = Path(a.output)
     out.parent.mkdir(parents=True, exist_ok=True)
-    matplotlib.image.imsave(out, to_display(img))
+    matplotlib.image.imsave(out, display_image(img))
     counts = {k: json_number(v) for k, v in (frame.counts or {}).items()}
     counts = {k: v for k, v in counts.items() if v is not None}
     if a.json:
@@ -239,7 +217,7 @@ def _add_study(sub) -> None:
     _configs_argument(s)
     s.add_argument("--out", help="output directory (default runs/NAME)")
     s.add_argument("--frames", type=_positive, help="frames per camera path (overrides)")
-    s.add_argument("--resolution", type=_resolution, help="WxH (overrides)")
+    s.add_argument("--resolution", type=resolution_arg, help="WxH (overrides)")
     s.add_argument("--force", action="store_true", help="discard stored rows and recompute")
     s.add_argument("--no-figures", action="store_true", help="do not draw figures")
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -297,7 +275,7 @@ def _add_render(sub) -> None:
     s.add_argument("--pipeline", required=True, help="a registered pipeline type")
     s.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="a pipeline parameter (value in TOML syntax); repeatable")
-    s.add_argument("--resolution", type=_resolution, help="WxH (default 320x180)")
+    s.add_argument("--resolution", type=resolution_arg, help="WxH (default 320x180)")
     s.add_argument("--repeats", type=_positive, default=3, help="timed repeats (median)")
     s.add_argument("-o", "--output", required=True, help="the PNG to write")
     s.add_argument("--json", action="store_true", help="print the counts as JSON")
@@ -323,7 +301,7 @@ def _add_reference(sub) -> None:
     r.add_argument("study", help="a study TOML file or a bundled study's name")
     _configs_argument(r)
     r.add_argument("--frames", type=_positive)
-    r.add_argument("--resolution", type=_resolution)
+    r.add_argument("--resolution", type=resolution_arg)
     r.set_defaults(fn=cmd_reference)
     r = rsub.add_parser("clear", help="delete every cached reference",
                         description="Delete every cached reference frame.")

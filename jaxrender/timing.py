@@ -1,6 +1,8 @@
-"""Honest time (DESIGN.md principle 9), for the study, ``jaxrender bench`` and benchmarks/:
-compile timed apart, warm-up, ``block_until_ready``, several repeats, the median; the device
-recorded beside every number.
+"""Time as the study, ``jaxrender bench`` and benchmarks/ measure it: compile timed apart (a
+first call would mix it in), warm-up, ``block_until_ready`` (JAX dispatches asynchronously, so
+a call returns before its work is done), several repeats and their median (a host's speed
+drifts within a run), and the device recorded beside every number (a time means nothing
+without it).
 """
 
 from __future__ import annotations
@@ -73,7 +75,8 @@ def time_call(fn: Callable, *args, repeats: int = 3, warmup: int = 0):
     return out, statistics.median(samples), samples
 
 
-def _stats(samples_ms: list[float]) -> dict:
+def sample_stats(samples_ms: list[float]) -> dict:
+    """Median, min, max and count of timed samples (ms)."""
     return {"median_ms": statistics.median(samples_ms), "min_ms": min(samples_ms),
             "max_ms": max(samples_ms), "repeats": len(samples_ms)}
 
@@ -106,7 +109,7 @@ def time_compiled(fn, *args, repeats: int = 10, warmup: int = 2, keep_compiled: 
     compile_s = time.perf_counter() - t0
     out, _, samples = time_call(compiled, *args, repeats=repeats, warmup=warmup)
     extra = {"compiled": compiled} if keep_compiled else {}
-    return dict(_stats(samples), compile_s=compile_s, **memory_analysis(compiled), out=out,
+    return dict(sample_stats(samples), compile_s=compile_s, **memory_analysis(compiled), out=out,
                 **extra)
 
 
@@ -117,7 +120,42 @@ def time_first_call(call: Callable[[], object], repeats: int = 10) -> dict:
     block(call())
     first_ms = (time.perf_counter() - t0) * 1e3
     out, median, samples = time_call(call, repeats=repeats)
-    return dict(_stats(samples), compile_s=max(first_ms - median, 0.0) / 1e3, out=out)
+    return dict(sample_stats(samples), compile_s=max(first_ms - median, 0.0) / 1e3, out=out)
+
+
+def time_interleaved(steps: dict[str, Callable], repeats: int, rounds: int = 10,
+                     warmup: int = 3) -> tuple[dict, dict]:
+    """Median ms of ``state = step(state)`` for each named step (the state starts as None:
+    a frame loop can hand each frame's buffers to the next), the steps taking turns over
+    ``rounds`` rounds of ``repeats // rounds`` calls: a call of well under a millisecond is
+    host-bound, and the host's speed drifts within a run. Returns the medians and each
+    step's last state."""
+    state = dict.fromkeys(steps)
+    for name, step in steps.items():
+        for _ in range(warmup):
+            state[name] = block(step(state[name]))
+    samples = {name: [] for name in steps}
+    for _ in range(rounds):
+        for name, step in steps.items():
+            for _ in range(max(1, repeats // rounds)):
+                t0 = time.perf_counter()
+                state[name] = block(step(state[name]))
+                samples[name].append((time.perf_counter() - t0) * 1e3)
+    return {name: statistics.median(v) for name, v in samples.items()}, state
+
+
+def time_batched(fn: Callable, *args, calls: int, repeats: int = 3) -> float:
+    """Median ms per call of ``calls`` calls dispatched back to back with one wait at the end:
+    the throughput a loop that never waits for a frame reaches."""
+    per = []
+    for _ in range(repeats):
+        block(fn(*args))
+        t0 = time.perf_counter()
+        outs = [fn(*args) for _ in range(calls)]
+        block(outs)
+        per.append((time.perf_counter() - t0) * 1e3 / calls)
+        del outs
+    return statistics.median(per)
 
 
 def peak_memory() -> dict:

@@ -1,4 +1,4 @@
-"""The data that flows between stages (DESIGN.md, "The data flow").
+"""The data that flows between stages: scene -> visibility -> shading -> image.
 
 Every stage takes data and returns data. These containers are pytrees: array fields are
 traced, fields marked static are hashable metadata. Leading batch axes are allowed on every

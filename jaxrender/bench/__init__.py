@@ -5,28 +5,21 @@ and peak device memory, printed as markdown tables and written as JSON.
     jaxrender bench --json bench.json          # the full sweeps (for the GPU)
     python -m jaxrender.bench --sections raster --json raster.json
 
-The raster sweeps use the terrain of ``benchmarks/bench_raster.py`` (same mesh and camera);
-pipelines run on every built-in scene from its default camera, every (scene, pipeline) a row:
-a scene's programs compile side by side, then each is timed alone, and a row carries its
-compile time apart from its steady-state median. No default budget: every row runs to its
-repeats (``--budget`` caps a row's timed repeats, never skips one). This module imports nothing heavy until ``run``.
+The raster sweeps draw the benchmark terrain (``bench.raster.terrain_clip``); pipelines run
+on every built-in scene from its default camera, every (scene, pipeline) a row: a scene's
+programs compile side by side, then each is timed alone, and a row carries its compile time
+apart from its steady-state median. No default budget: every row runs to its repeats
+(``--budget`` caps a row's timed repeats, never skips one). This module imports nothing heavy
+until ``run``.
 """
 
 from __future__ import annotations
 
 import argparse
 
+from jaxrender.parsing import resolution_arg
+
 SECTIONS = ("raster", "pipelines", "metrics")
-
-
-def _res(text: str) -> tuple[int, int]:
-    try:
-        w, h = (int(x) for x in text.lower().split("x"))
-        if w > 0 and h > 0:
-            return w, h
-    except ValueError:
-        pass
-    raise argparse.ArgumentTypeError(f"expected WxH, e.g. 1920x1080, got {text!r}")
 
 
 def _workers(text: str) -> int:
@@ -40,7 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="small sizes (a CPU smoke run) instead of the full sweeps")
     p.add_argument("--json", metavar="PATH", help="write every row and the environment here")
     p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS))
-    p.add_argument("--resolution", type=_res, help="pipelines: WxH (default 1920x1080, "
+    p.add_argument("--resolution", type=resolution_arg, help="pipelines: WxH (default 1920x1080, "
                    "quick 160x90)")
     p.add_argument("--scenes", nargs="+", metavar="SCENE",
                    help="pipelines: scenes as name or name:key=value,... (default: all built-ins "

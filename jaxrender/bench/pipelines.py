@@ -5,28 +5,16 @@ from __future__ import annotations
 
 import statistics
 import time
-import tomllib
 from concurrent.futures import ThreadPoolExecutor, wait
 
+from jaxrender.parsing import parse_spec
 from jaxrender.timing import block
 
 # Scenes as "name" or "name:key=value,key=value" (TOML values); the 100k-triangle target scene
 # comes second, beside the scenes of studies/performance.toml.
 TARGET_SCENE = "many_small:n_triangles=100000,point_lights=4"
-COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "overflow")
-
-
-def parse_spec(text: str) -> tuple[str, dict]:
-    """'name:k=v,k=v' -> (name, {k: v}) with TOML values; bare words are strings."""
-    name, _, rest = text.partition(":")
-    params = {}
-    for item in filter(None, rest.split(",")):
-        k, _, v = item.partition("=")
-        try:
-            params[k.strip()] = tomllib.loads(f"v = {v}")["v"]
-        except tomllib.TOMLDecodeError:
-            params[k.strip()] = v.strip()
-    return name.strip(), params
+COUNT_COLUMNS = ("shade_invocations", "helper_lanes", "overshading", "waves", "lane_utilization",
+                 "bytes_intermediate", "overflow")
 
 
 def default_scene_specs() -> list[str]:
@@ -77,7 +65,7 @@ def _compile_scene(scene, camera, pipeline_specs, width, height, workers: int) -
     from jaxrender.timing import compile_program
 
     def build(spec):
-        pname, pparams = parse_spec(spec)
+        pname, pparams = parse_spec(spec, "pipeline")
         cfg = make_config(pname, width=width, height=height, **pparams)
         return compile_program(get_pipeline(pname), scene, camera, cfg)
 
@@ -100,7 +88,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
     for scene_spec in scene_specs:
         base = dict(scene=scene_spec, resolution=f"{width}x{height}")
         try:
-            name, params = parse_spec(scene_spec)
+            name, params = parse_spec(scene_spec, "scene")
             t0 = time.perf_counter()
             scene = load_lit_scene(name, **params)
             camera = default_camera(scene)
@@ -117,9 +105,7 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
                     raise comp
                 r = time_row(lambda c=comp, s=scene, k=camera: c.call(s, k), repeats, budget_s)
                 frame = r.pop("out")
-                if comp.method == "aot":
-                    r["compile_s"] = comp.compile_ms / 1e3
-                row.update(r, compile_method=comp.method)
+                row.update(r, compile_s=comp.compile_ms / 1e3)
                 counts = getattr(frame, "counts", None) or {}
                 for k in COUNT_COLUMNS:
                     if k in counts:
@@ -130,4 +116,4 @@ def time_pipelines(scene_specs, pipeline_specs, width: int, height: int, *, repe
 
 
 COLUMNS = ["scene", "pipeline", "resolution", "median_ms", "min_ms", "repeats", "compile_s",
-           "compile_method", "shade_invocations", "overshading", "skipped"]
+           "shade_invocations", "overshading", "skipped"]

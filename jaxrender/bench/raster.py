@@ -1,5 +1,7 @@
 """Rasterizer throughput: full visibility (transform-free: clip, coverage, resolve) against
-triangle count and resolution, on the terrain scene of ``benchmarks/bench_raster.py``."""
+triangle count and resolution, on the benchmark terrain that every raster benchmark draws
+(``jaxrender bench``, benchmarks/bench_raster.py, bench_peers.py, bench_scale.py and the
+profilers), so that their numbers describe the same frame."""
 
 from __future__ import annotations
 
@@ -24,13 +26,13 @@ QUICK = [(2_500, 160, 90), (10_000, 320, 180)]
 
 
 def terrain_camera():
-    """The camera of benchmarks/bench_raster.py: terrain seen from above at an angle."""
+    """The benchmark terrain's camera: the terrain seen from above at an angle."""
     return look_at((0.0, 30.0, 62.0), (0.0, 0.0, -5.0), fov_y_deg=55, near=0.5, far=500)
 
 
 def terrain_clip(n_tris: int, width: int, height: int):
-    """(clip float32[V,4], faces int32[T,3]) of the benchmark terrain: identical to
-    benchmarks/bench_raster.py's ``scene``, so every raster benchmark sees the same frame."""
+    """(clip float32[V,4], faces int32[T,3]) of the benchmark terrain of about ``n_tris``
+    triangles through ``terrain_camera`` at this image size."""
     v, f = terrain_mesh(n_tris)
     clip = world_to_clip(jnp.asarray(v), terrain_camera(), width / height)
     return clip, jnp.asarray(f)

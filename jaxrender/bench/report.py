@@ -11,7 +11,8 @@ def fmt(v) -> str:
     return "" if v is None else str(v)
 
 
-def print_table(rows: list[dict], columns: list[str], file=None) -> None:
+def print_table(rows, columns: list[str], file=None) -> None:
+    """Rows (any iterable of dicts, printed as they come) as a markdown table."""
     print("| " + " | ".join(columns) + " |", file=file)
     print("|" + "|".join("---" for _ in columns) + "|", file=file)
     for r in rows:

@@ -1,6 +1,6 @@
 """Figures: one pure function per figure (``plots``), one style file, deterministic saving."""
 
-from jaxrender.figures.io import STYLE, save_figure, to_display  # noqa: F401
+from jaxrender.figures.io import STYLE, save_figure  # noqa: F401
 from jaxrender.figures.make import draw_run_figures, render_figures  # noqa: F401
 from jaxrender.figures.plots import (  # noqa: F401
     fig_dacs_decisions,

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from jaxrender.metrics import to_display
 from jaxrender.study import store, time_series
 from jaxrender.study.summary import SUMMARY_COLUMNS, summarize
 
@@ -164,7 +165,7 @@ def image_grid_panels(run: Run, max_entries: int = 8) -> list[tuple[str, dict]]:
                 if m["pipeline"] not in best or q > best[m["pipeline"]][0]:
                     best[m["pipeline"]] = (q, m, p)
             ents = [(m, p) for _, m, p in best.values()][:max_entries]
-        ref = _arrays(refs[key])["image"].astype(np.float32)
+        ref = display_image(_arrays(refs[key])["image"])
         entries, errs = [], []
         for m, p in ents:
             a = _arrays(p)
@@ -172,7 +173,7 @@ def image_grid_panels(run: Run, max_entries: int = 8) -> list[tuple[str, dict]]:
             errs.append(err)
             q = psnr.get((m["seq"], frame))
             entries.append({"label": variant_name(m["pipeline"], m["params"]),
-                            "image": a["image"].astype(np.float32), "error": err,
+                            "image": display_image(a["image"]), "error": err,
                             "caption": f"PSNR {q:.2f} dB" if _num(q) else ""})
         total = np.sum(errs, axis=0)
         h, w = total.shape
@@ -182,6 +183,12 @@ def image_grid_panels(run: Run, max_entries: int = 8) -> list[tuple[str, dict]]:
             "title": f"{scene} / {path}, frame {frame}", "device": run.device,
             "reference": ref, "crop": crop, "error_max": emax, "entries": entries}))
     return out
+
+
+def display_image(linear) -> np.ndarray:
+    """A saved linear frame as shown: the metrics' ``to_display`` (clamp, sRGB encode), with
+    NaN drawn black so that a broken frame still shows where it broke."""
+    return np.asarray(to_display(np.nan_to_num(np.asarray(linear, np.float32), nan=0.0)))
 
 
 def hardest_crop(error: np.ndarray, size: int) -> tuple[int, int, int, int]:
@@ -217,7 +224,7 @@ def aux_tables(run: Run, kind: str, max_entries: int = 6) -> list[tuple[str, dic
                                                          _param_order(e[0]["params"]))):
             a = _arrays(p)
             e = {"label": variant_name(m["pipeline"], m["params"]),
-                 "image": a["image"].astype(np.float32)}
+                 "image": display_image(a["image"])}
             if kind == "dacs":
                 e["level"], e["shaded"] = _first(a, DACS_LEVEL_KEYS), _first(a, DACS_SHADED_KEYS)
                 if e["level"] is None and e["shaded"] is None:

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import matplotlib
 import matplotlib.style
-import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -52,8 +51,3 @@ def _save(fig: Figure, png: Path, pdf: Path) -> None:
         fig.savefig(pdf, format="pdf", metadata={"CreationDate": None, "ModDate": None,
                                                   "Producer": None, "Creator": None})
 
-
-def to_display(linear: np.ndarray) -> np.ndarray:
-    """Linear RGB -> clamp -> sRGB encode, as the LDR metrics see images."""
-    x = np.clip(np.nan_to_num(np.asarray(linear, np.float32), nan=0.0), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)

@@ -13,7 +13,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from jaxrender.figures.io import new_figure, style, to_display
+from jaxrender.figures.io import new_figure, style
 
 
 def _footer(fig: Figure, device: str) -> None:
@@ -32,8 +32,8 @@ def _off(ax) -> None:
 def fig_image_grid(panel: dict) -> Figure:
     """Reference, each pipeline, its error map and a zoomed crop of the hardest region.
 
-    panel: {title, device, reference: (H,W,3) linear, crop: (y0, x0, h, w), error_max: float,
-            entries: [{label, image: (H,W,3) linear, error: (H,W), caption}]}"""
+    panel: {title, device, reference: (H,W,3) display-referred, crop: (y0, x0, h, w), error_max: float,
+            entries: [{label, image: (H,W,3) display-referred, error: (H,W), caption}]}"""
     entries = panel["entries"]
     y0, x0, ch, cw = panel["crop"]
     h, w = panel["reference"].shape[:2]
@@ -48,8 +48,7 @@ def fig_image_grid(panel: dict) -> Figure:
         im = None
         for r, (label, img, err, caption) in enumerate(items):
             a_img, a_err, a_crop = axes[r]
-            disp = to_display(img)
-            a_img.imshow(disp)
+            a_img.imshow(img)
             a_img.add_patch(Rectangle((x0 - 0.5, y0 - 0.5), cw, ch, fill=False, ec="#ff00ff",
                                       lw=0.8))
             a_img.set_ylabel(label, fontsize=7)
@@ -57,7 +56,7 @@ def fig_image_grid(panel: dict) -> Figure:
                 a_img.set_title(caption, fontsize=6, loc="left")
             if err is not None:
                 im = a_err.imshow(err, cmap="magma", vmin=0.0, vmax=vmax)
-            a_crop.imshow(disp[y0:y0 + ch, x0:x0 + cw])
+            a_crop.imshow(img[y0:y0 + ch, x0:x0 + cw])
             for a in (a_img, a_err, a_crop):
                 _off(a)
             a_img.set_ylabel(label, fontsize=7)
@@ -123,15 +122,15 @@ def fig_dacs_decisions(table: dict) -> Figure:
     """Shading decisions (DACS): per pipeline variant the image, the level at which each pixel
     was decided and whether it was shaded (white) or interpolated.
 
-    table: {title, device, entries: [{label, image: (H,W,3) linear, level: (H,W) int or None,
-            shaded: (H,W) bool or None}]}"""
+    table: {title, device, entries: [{label, image: (H,W,3) display-referred,
+            level: (H,W) int or None, shaded: (H,W) bool or None}]}"""
     entries = table["entries"]
     h, w = entries[0]["image"].shape[:2]
     with style():
         fig = new_figure(3 * 2.0, len(entries) * 2.0 * h / max(w, 1) + 0.6)
         axes = fig.subplots(len(entries), 3, squeeze=False)
         for row, e in zip(axes, entries):
-            row[0].imshow(to_display(e["image"]))
+            row[0].imshow(e["image"])
             row[0].set_ylabel(e["label"], fontsize=7)
             if e.get("level") is not None:
                 m = np.asarray(e["level"])
@@ -163,7 +162,7 @@ def fig_object_space_marking(table: dict) -> Figure:
         fig = new_figure(3 * 2.0, len(entries) * 2.0 * h / max(w, 1) + 0.6)
         axes = fig.subplots(len(entries), 3, squeeze=False)
         for row, e in zip(axes, entries):
-            row[0].imshow(to_display(e["image"]))
+            row[0].imshow(e["image"])
             row[1].imshow(np.asarray(e["chunk_state"]), cmap=cmap, vmin=0, vmax=2)
             row[1].set_title("chunks: green hit, blue fully visible", fontsize=6)
             if e.get("mip_level") is not None:

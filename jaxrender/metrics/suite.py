@@ -14,10 +14,14 @@ IMAGE_METRICS = ("mse", *(n for n, m in METRICS.items() if not m.sequence))
 
 
 def image_metrics(test, reference, *, names=IMAGE_METRICS, linear: bool = True,
-                  exposure: float = 0.0, dtype=jnp.float32) -> dict:
+                  exposure: float = 0.0, dtype=jnp.float32, error_map: bool = False):
     """{name: value per image} for LDR metrics. Linear inputs (pipeline output) go through
     ``to_display`` (exposure, clamp, sRGB encode) once; pass ``linear=False`` for images that
-    are already display-referred."""
+    are already display-referred.
+
+    With ``error_map`` also the per-pixel error the figures show, as ``(values, map)``: the
+    map of the registry's ``error_map`` metric when it is among ``names`` and returns one of
+    the image's size, else the mean absolute display difference over the channels."""
     unknown = set(names) - set(IMAGE_METRICS)
     if unknown:
         raise ValueError(f"image_metrics: unknown metrics {sorted(unknown)}; "
@@ -28,9 +32,16 @@ def image_metrics(test, reference, *, names=IMAGE_METRICS, linear: bool = True,
             test = to_display(as_float(test, dt, "image_metrics", "test"), "ldr", exposure)
             reference = to_display(as_float(reference, dt, "image_metrics", "reference"),
                                    "ldr", exposure)
-    out = {}
+    out, err = {}, None
     for name in names:
         fn = mse if name == "mse" else METRICS[name].fn
         value = fn(test, reference, dtype=dtype)
         out[name] = value[0] if isinstance(value, tuple) else value
-    return out
+        if name != "mse" and METRICS[name].error_map and isinstance(value, tuple):
+            err = value[1]
+    if not error_map:
+        return out
+    *shape, channels = jnp.shape(test)
+    if err is None or jnp.shape(err) != tuple(shape):
+        err = jnp.sum(jnp.abs(jnp.asarray(test) - jnp.asarray(reference)), axis=-1) / channels
+    return out, err

@@ -1,8 +1,8 @@
 """What every pipeline shares: the config base, the standard counts of a Frame and the NaN
 image of a frame that overflowed.
 
-A pipeline is made of stages (DESIGN.md, "The data flow"): ``visibility`` (pipelines.visibility),
-a plan that lists the points to shade as a ``WorkList``, ``dispatch.shade`` over it, and a
+A pipeline is made of stages, data in and data out: ``visibility`` (pipelines.visibility), a
+plan that lists the points to shade as a ``WorkList``, ``dispatch.shade`` over it, and a
 reconstruction into the image; its counts are read off the work lists (``waves.count_waves``
 for the waves). It registers its ``step`` (or a stateless ``frame``) with the registry
 (``registry.register`` / ``register_frame``); ``pipelines.program`` compiles and runs it.

@@ -46,7 +46,7 @@ from jaxrender.pipelines.pixel_ids import (
 )
 from jaxrender.pipelines.registry import REGISTRY, register
 from jaxrender.pipelines.visibility import points_from_vis, visibility
-from jaxrender.pipelines.waves import tile_waves
+from jaxrender.pipelines.waves import check_wave_size, tile_waves
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.reprojection import DEFAULT_DEPTH_TOLERANCE, reproject
 from jaxrender.types import Array, Frame
@@ -78,7 +78,7 @@ class CheckerboardConfig(PipelineConfig):
         super().__post_init__()
         check_choice("pattern", self.pattern, PATTERNS)
         check_choice("ids", self.ids, ID_KINDS)
-        check_choice("wave_size", self.wave_size, (32, 64))
+        check_wave_size(self.wave_size)
         if not float(self.depth_tolerance) > 0.0:
             raise ValueError(f"depth_tolerance must be > 0, got {self.depth_tolerance}")
         # Nothing accepted and ignored: a setting that cannot act in this config is refused.

@@ -5,8 +5,8 @@ of x and y. (0, 0) mod s is level 0, always shaded. Then for d = s/2, s/4, ..., 
 levels: the *diagonal* one, pixels whose x and y are both odd multiples of d, decided from the
 four diagonal neighbours at distance d; and the *axis* one, pixels with exactly one coordinate
 an odd multiple of d (the other a multiple of 2d), decided from the four axis neighbours at d.
-For s = 4 these are DESIGN.md's five levels: (0,0); (2,2); (0,2),(2,0); the four (odd, odd);
-the remaining eight. Every parent lies on an earlier level, so the levels run in order.
+For s = 4 these are the five levels of DACS (Mallett & Yuksel 2018): (0,0); (2,2); (0,2),(2,0);
+the four (odd, odd); the remaining eight. Every parent lies on an earlier level, so the levels run in order.
 """
 
 from __future__ import annotations

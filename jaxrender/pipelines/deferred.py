@@ -24,7 +24,7 @@ from jaxrender.pipelines.gbuffer import (DEPTH_BYTES, GBUFFER_CHANNELS, PIXEL_BY
                                          pack_gbuffer, unpack_gbuffer)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.visibility import visibility
-from jaxrender.pipelines.waves import tile_waves
+from jaxrender.pipelines.waves import check_wave_size, tile_waves
 from jaxrender.shading import shade, surface_points
 from jaxrender.types import Array, Frame
 
@@ -44,8 +44,7 @@ class DeferredConfig(PipelineConfig):
         super().__post_init__()
         if self.msaa not in (1, 2, 4, 8):
             raise ValueError(f"msaa must be 1, 2, 4 or 8, got {self.msaa}")
-        if self.wave_size not in (32, 64):
-            raise ValueError(f"wave_size must be 32 or 64, got {self.wave_size}")
+        check_wave_size(self.wave_size)
         # Nothing accepted and ignored: a setting that cannot act in this config is refused.
         if self.per_sample_shading and self.msaa == 1:
             raise ValueError("per_sample_shading = true has no effect with msaa = 1 (one sample "

@@ -1,11 +1,11 @@
 """Work lists and chunked dispatch: the one place where shading work is launched.
 
-DESIGN principle 2: a pipeline that shades fewer points must run fewer shader evaluations.
-The points to shade are compacted into a ``WorkList`` (``compaction.compact_indices``), and
+A pipeline that shades fewer points must run fewer shader evaluations, or its time would not
+follow its work and a comparison of architectures would measure the simulation. The points to shade are compacted into a ``WorkList`` (``compaction.compact_indices``), and
 ``shade()`` runs over it in chunks of a static size inside a ``lax.while_loop`` whose trip count
 is the number of chunks that hold work, like DispatchIndirect: the compiled program evaluates
-the shader ``ceil(n / chunk)`` times, never over the full screen with a mask. Principle 3: the
-counts are read off that same work list (``count`` items, ``chunks * chunk`` lanes launched).
+the shader ``ceil(n / chunk)`` times, never over the full screen with a mask. The counts are
+read off that same work list, so they cannot disagree with the work done (``count`` items, ``chunks * chunk`` lanes launched).
 """
 
 from __future__ import annotations

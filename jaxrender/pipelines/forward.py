@@ -28,12 +28,11 @@ from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
                                             points_at_xy, raster_fragments)
-from jaxrender.pipelines.waves import count_waves, group_sizes
+from jaxrender.pipelines.waves import check_wave_size, count_waves, group_sizes
 from jaxrender.shading import alpha_test, shade
 from jaxrender.sorting import lex_sort
 from jaxrender.types import Array, Frame
 
-WAVE_SIZES = (32, 64)
 INF = float("inf")
 
 
@@ -55,8 +54,7 @@ class ForwardConfig(PipelineConfig):
         super().__post_init__()
         if self.msaa not in (1, 2, 4, 8):
             raise ValueError(f"msaa must be 1, 2, 4 or 8, got {self.msaa}")
-        if self.wave_size not in WAVE_SIZES:
-            raise ValueError(f"wave_size must be 32 or 64, got {self.wave_size}")
+        check_wave_size(self.wave_size)
 
 
 class DrawList(NamedTuple):

@@ -29,7 +29,7 @@ from jaxrender.pipelines.os_marking import footprint, mark_chunks, mark_shadels,
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
 from jaxrender.pipelines.registry import REGISTRY, register
 from jaxrender.pipelines.visibility import visibility
-from jaxrender.pipelines.waves import count_waves
+from jaxrender.pipelines.waves import check_wave_size, count_waves
 from jaxrender.shading import shade, surface_points
 from jaxrender.types import Array, Frame, pytree_dataclass
 
@@ -77,11 +77,11 @@ class ObjectSpaceConfig(PipelineConfig):
                   "sheet_resolution": self.sheet_resolution >= 0,
                   "texel_density": self.texel_density > 0,
                   "max_sheet_resolution": self.max_sheet_resolution >= CHUNK,
-                  "shade_every": self.shade_every >= 1,
-                  "wave_size": self.wave_size in (32, 64)}
+                  "shade_every": self.shade_every >= 1}
         for k, ok in checks.items():
             if not ok:
                 raise ValueError(f"object_space: invalid {k} = {getattr(self, k)!r}")
+        check_wave_size(self.wave_size)
         # Nothing accepted and ignored: an explicit sheet_resolution replaces the per-object
         # sizing (texel_density); max_sheet_resolution then only caps it.
         if self.sheet_resolution > 0:

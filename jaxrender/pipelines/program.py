@@ -12,7 +12,8 @@ length, config).
 ``lower`` and ``bind`` split the ahead-of-time path in two picklable halves (the study compiles
 in worker processes); ``compile`` joins them. Every result passes ``check_overflow``: a frame
 whose ``overflow`` count is non-zero raises PipelineOverflow, naming the pipeline, the frames
-and what to raise (principle 5). Under an outer trace the count stays in the Frame and the
+and what to raise: static shapes mean capacities, and an image with pixels dropped for want of
+one must never pass for a result. Under an outer trace the count stays in the Frame and the
 image is NaN.
 """
 

@@ -16,7 +16,8 @@ Alpha-tested scenes (``effects.alpha_test``): a fragment that fails the alpha te
 sample position is discarded before the depth test, so the sample sees what lies behind it.
 
 ``convergence_psnr`` renders at k and 2k and returns their LDR PSNR, the estimate a study sets
-beside its best pipeline (DESIGN: the reference should be converged >= 10 dB above it).
+beside its best pipeline: a reference converged well (10 dB or more) above the pipelines
+it judges measures their error, not its own.
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """The pipeline registry: one protocol for every pipeline, one ``type`` string per pipeline.
 
-A pipeline is three functions over its static config (DESIGN.md, "The data flow"):
+A pipeline is three functions over its static config, so that every pipeline is compiled,
+checked and run by the same code (``pipelines.program``):
 
 - ``prepare(scene, cfg) -> Static``: host-side work done once per scene (object-space shade
   sheets); default: nothing (None);

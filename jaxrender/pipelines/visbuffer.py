@@ -24,7 +24,7 @@ from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_over
 from jaxrender.pipelines.quads import BIG, first_of_segment_index, segment_starts
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.visibility import clip_vertices, points_at, visibility
-from jaxrender.pipelines.waves import TILE, count_waves, segment_lanes
+from jaxrender.pipelines.waves import TILE, check_wave_size, count_waves, segment_lanes
 from jaxrender.scene.camera import world_to_clip
 from jaxrender.shading import shade
 from jaxrender.sorting import lex_sort
@@ -120,8 +120,7 @@ class VisBufferConfig(PipelineConfig):
         object.__setattr__(self, "rate_image", tuple(tuple(str(r) for r in row)
                                                      for row in self.rate_image))
         self.layout  # validates the bit fields
-        if self.wave_size not in (32, 64):
-            raise ValueError(f"wave_size must be 32 or 64, got {self.wave_size}")
+        check_wave_size(self.wave_size)
         if self.vrs not in VRS_MODES:
             raise ValueError(f"vrs must be one of {', '.join(VRS_MODES)}, got {self.vrs!r}")
         if self.vrs_rate not in RATES:

@@ -17,6 +17,13 @@ import jax.numpy as jnp
 from jaxrender.types import Array
 
 TILE = 8  # pixels per side of a compute tile
+WAVE_SIZES = (32, 64)  # lanes per wave: the two widths GPUs run (32-lane warps, 64-lane waves)
+
+
+def check_wave_size(wave_size: int) -> None:
+    """Every pipeline config's check of its ``wave_size``."""
+    if wave_size not in WAVE_SIZES:
+        raise ValueError(f"wave_size must be 32 or 64, got {wave_size!r}")
 
 
 def count_waves(group_lanes: Array, wave_size: int, invocations: Array) -> tuple[Array, Array]:

@@ -120,12 +120,12 @@ def halton(n: int, base: int) -> np.ndarray:
     return out
 
 
-def jitter(camera: Camera, n_frames: int, width: int, height: int, *,
-           pattern: str = "halton") -> CameraPath:
+def jitter(camera: Camera, n_frames: int, height: int, *, pattern: str = "halton") -> CameraPath:
     """Sub-pixel jitter (as TAA does): frame t is shifted by ``jitter_px[t]`` in [-0.5, 0.5)^2
     pixels (Halton 2, 3, or "none"). The Camera holds no projection offset, so the shift is
     made by rotating the camera: exact at the image centre, off by O(offset * x^2 / f^2) px at
-    the edges (below 1e-2 px for fov <= 90 degrees). x right, y down, in pixels."""
+    the edges (below 1e-2 px for fov <= 90 degrees). x right, y down, in pixels. Only the
+    ``height`` sizes a pixel: the field of view is vertical and pixels are square."""
     eye, rot, fov, near, far = _np(camera)
     if pattern == "halton":
         offs = np.stack([halton(n_frames, 2), halton(n_frames, 3)], 1) - 0.5
@@ -155,10 +155,17 @@ class PathParam(NamedTuple):
 class PathType(NamedTuple):
     """A camera path a study names by ``type``: ``build(camera, frames, width, height,
     **params)`` starts from the scene's default camera and returns a CameraPath or a list of
-    cameras; ``params`` declares what a study may set."""
+    cameras; ``params`` declares what a study may set. ``overridden``: (param, by) pairs where
+    ``param`` has no effect once ``by`` is given, so a study may not set both."""
 
     build: Callable
     params: dict
+    overridden: tuple[tuple[str, str], ...] = ()
+
+
+def overridden_message(path_type: str, param: str, by: str) -> str:
+    return (f"camera path {path_type!r}: {param!r} has no effect when {by!r} is given; set "
+            f"one of them")
 
 
 def _static(camera, frames, width, height):
@@ -174,16 +181,22 @@ def _dolly(camera, frames, width, height, *, distance_per_frame):
 
 
 def _jitter(camera, frames, width, height, *, pattern="halton"):
-    return jitter(camera, frames, width, height, pattern=pattern)
+    return jitter(camera, frames, height, pattern=pattern)
 
 
-def _orbit(camera, frames, width, height, *, degrees_per_frame, distance=4.0, center=(),
+ORBIT_OVERRIDDEN = (("distance", "center"),)  # distance places the centre that is not given
+
+
+def _orbit(camera, frames, width, height, *, degrees_per_frame, distance=None, center=(),
            radius=0.0):
-    """Around ``center`` (default: the point ``distance`` ahead of the camera), starting where
-    the camera stands."""
+    """Around ``center`` (default: the point ``distance``, 4 units, ahead of the camera),
+    starting where the camera stands, at ``radius`` (0: the camera's distance from the centre
+    in the ground plane)."""
+    if distance is not None and len(center):
+        raise ValueError(overridden_message("orbit", "distance", "center"))
     eye = np.asarray(camera.eye, np.float64)
     fwd = -np.asarray(camera.rotation, np.float64)[2]
-    c = np.asarray(center or eye + fwd * distance)
+    c = np.asarray(center if len(center) else eye + fwd * (4.0 if distance is None else distance))
     rel = eye - c
     radius = float(radius or np.hypot(rel[0], rel[2]) or 1.0)
     return orbit(c, radius, frames, float(degrees_per_frame), height=rel[1],
@@ -199,7 +212,7 @@ PATH_TYPES: dict[str, PathType] = {
     "orbit": PathType(_orbit, {"degrees_per_frame": PathParam(float),
                                "distance": PathParam(float, 4.0),
                                "center": PathParam(tuple, ()),
-                               "radius": PathParam(float, 0.0)}),
+                               "radius": PathParam(float, 0.0)}, ORBIT_OVERRIDDEN),
     "dolly": PathType(_dolly, {"distance_per_frame": PathParam(float)}),
     "jitter": PathType(_jitter, {"pattern": PathParam(str, "halton")}),
 }

@@ -1,4 +1,5 @@
-"""Effect flags: what a scene asks the shader to compute (DESIGN.md principle 6).
+"""Effect flags: what a scene asks the shader to compute, so that a scene that does not ask for
+an effect pays nothing for it.
 
 ``Effects`` is a frozen, hashable dataclass stored as a *static* field of the scene, so every
 flag is a Python branch at trace time: an effect that is off compiles to nothing.

@@ -128,24 +128,13 @@ def _value(x) -> float:
 
 
 def frame_metrics(test: np.ndarray, ref: np.ndarray, names) -> tuple[dict, np.ndarray]:
-    """Per-frame metrics of linear RGB (H, W, 3) images, display-referred (``to_display``:
-    clamp, sRGB encode) as the published numbers are, and an error map for the figures
-    (the ``error_map`` metric's map when it is computed, else the mean absolute display
-    difference)."""
-    t, r = metrics.to_display(test), metrics.to_display(ref)
-    out: dict = {}
-    err_map = None
-    for name in names:
-        m = metrics.METRICS[name]
-        if m.sequence:
-            continue
-        res = m.fn(t, r)
-        out[name] = _value(res)
-        if m.error_map and isinstance(res, tuple) and len(res) > 1:
-            err_map = np.asarray(res[1], np.float32)
-    if err_map is None or err_map.shape[:2] != test.shape[:2]:
-        err_map = np.abs(np.asarray(t) - np.asarray(r)).mean(axis=-1)
-    return out, np.asarray(err_map).reshape(test.shape[:2]).astype(np.float32)
+    """The per-image metrics among ``names`` of linear RGB (H, W, 3) images as floats, through
+    ``metrics.image_metrics`` (display-referred, as the published numbers are), and the error
+    map the figures show."""
+    per_image = [n for n in names if not metrics.METRICS[n].sequence]
+    values, err_map = metrics.image_metrics(test, ref, names=per_image, error_map=True)
+    return ({n: _value(v) for n, v in values.items()},
+            np.asarray(err_map, np.float32).reshape(test.shape[:2]))
 
 
 def sequence_metrics(tests: np.ndarray, refs: np.ndarray, names) -> tuple[dict, list]:

@@ -20,11 +20,11 @@ from pathlib import Path
 from jaxrender import catalog
 from jaxrender.errors import StudyError, UserError
 from jaxrender.metrics import METRICS
-from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
+from jaxrender.parsing import parse_resolution
+from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED, overridden_message
 from jaxrender.study import backend, shader_cost
 from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
-                                   ReferenceSpec, SceneSpec, Study, TimingSpec, Variant,
-                                   parse_resolution)
+                                   ReferenceSpec, SceneSpec, Study, TimingSpec, Variant)
 from jaxrender.study.tables import (Checker, type_name, key_path, read_table, read_toml,
                                     shown_path)
 
@@ -196,6 +196,13 @@ def _path(ck: Checker, item, path: str, local, default_frames: int) -> PathSpec:
     for k, p in declared.items():
         if p.default is REQUIRED and k not in params:
             ck.fail(f"{path}.params", f"camera path {ptype!r} needs the parameter {k!r}")
+    own = item.get("params", {})  # the entry's own, a table by now
+    for k, by in PATH_TYPES[ptype].overridden:
+        if k in params and by in params:
+            if by in own and k not in own:  # the entry's key replaces what its preset set
+                del params[k]
+            else:
+                ck.fail(f"{path}.params.{k}", overridden_message(ptype, k, by))
     return PathSpec(name, ptype, d["frames"], _frozen(params), source)
 
 

@@ -11,6 +11,7 @@ from typing import Any
 
 from jaxrender.errors import UserError
 from jaxrender.metrics import METRICS
+from jaxrender.parsing import parse_resolution
 
 FIGURES = (
     "image_grid",
@@ -23,7 +24,6 @@ FIGURES = (
     "time_work",
     "summary_table",
 )
-MAX_SIDE = 8192
 SSIM_MIN_SIDE = 11  # the 11-tap Gaussian window of Wang et al.
 
 
@@ -136,26 +136,6 @@ class Study:
                 raise UserError(f"--resolution: MSSIM needs at least {SSIM_MIN_SIDE}x"
                                 f"{SSIM_MIN_SIDE} pixels; the study asks for mssim")
         return s
-
-
-
-def parse_resolution(value, where: str = "resolution") -> tuple[int, int]:
-    """'WxH' or [W, H] -> (W, H); UserError naming ``where`` otherwise."""
-    msg = f"{where}: expected 'WxH' or [width, height] with integers in 1..{MAX_SIDE}"
-    if isinstance(value, str):
-        parts = value.lower().split("x")
-        if len(parts) != 2 or not all(p.strip().isdigit() for p in parts):
-            raise UserError(f"{msg}, got {value!r}")
-        w, h = (int(p) for p in parts)
-    elif isinstance(value, (list, tuple)) and len(value) == 2:
-        if not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-            raise UserError(f"{msg}, got {value!r}")
-        w, h = value
-    else:
-        raise UserError(f"{msg}, got {value!r}")
-    if not (1 <= w <= MAX_SIDE and 1 <= h <= MAX_SIDE):
-        raise UserError(f"{msg}, got {w}x{h}")
-    return int(w), int(h)
 
 
 def _toml_value(v) -> str:

@@ -47,3 +47,18 @@ def test_image_metrics_applies_display_once(seeded):
     assert set(got) == set(metrics.IMAGE_METRICS)
     with pytest.raises(ValueError, match="unknown"):
         metrics.image_metrics(a, b, names=("lpips",))
+
+
+MAP_TOL = 1e-6  # float32 display images
+
+
+def test_image_metrics_error_map(seeded):
+    a, b = seeded.pair((12, 20, 3))
+    values, flip_map = metrics.image_metrics(b, a, names=("rmse", "flip"), error_map=True)
+    disp_a, disp_b = np.asarray(metrics.to_display(a)), np.asarray(metrics.to_display(b))
+    np.testing.assert_allclose(np.asarray(flip_map), np.asarray(metrics.flip(disp_a, disp_b)[1]),
+                               atol=MAP_TOL, err_msg=seeded.msg("the flip metric's map"))
+    assert set(values) == {"rmse", "flip"}
+    _, mean_map = metrics.image_metrics(b, a, names=("rmse",), error_map=True)
+    np.testing.assert_allclose(np.asarray(mean_map), np.abs(disp_b - disp_a).mean(-1),
+                               atol=MAP_TOL, err_msg=seeded.msg("mean absolute display error"))

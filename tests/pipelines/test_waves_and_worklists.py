@@ -88,3 +88,13 @@ def test_packed_segmented_cummin_equals_the_scan(rng):
                                   err_msg="packed-key segmented cummin")
     np.testing.assert_array_equal(np.asarray(scan_segmented_cummin(*args)), want,
                                   err_msg="scan segmented cummin")
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "deferred", "visbuffer", "checkerboard",
+                                      "object_space"])
+def test_every_pipeline_checks_wave_size_one_way(pipeline):
+    from jaxrender.pipelines import make_config
+
+    assert make_config(pipeline, width=8, height=8, wave_size=64).wave_size == 64
+    with pytest.raises(ValueError, match="^wave_size must be 32 or 64, got 48$"):
+        make_config(pipeline, width=8, height=8, wave_size=48)

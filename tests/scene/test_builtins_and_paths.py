@@ -81,7 +81,7 @@ def test_pan_moves_the_image_by_n_pixels_per_frame():
 def test_jitter_shifts_by_its_subpixel_offsets_and_vmaps():
     w, h = 64, 64
     cam = look_at((0, 1, 5), (0, 1, 0))
-    path = jitter(cam, 8, w, h)
+    path = jitter(cam, 8, h)
     offs = np.asarray(path.jitter_px)
     assert np.all(np.abs(offs) < 0.5) and len(np.unique(offs[:, 0])) == 8
     pts = jnp.asarray([[0.0, 1.0, 0.0]], jnp.float32)
@@ -100,3 +100,19 @@ def test_orbit_and_dolly():
     cam = look_at((0, 0, 5), (0, 0, 0))
     eyes = np.asarray(dolly(cam, 3, 0.5).cameras.eye)
     np.testing.assert_allclose(eyes[:, 2], [5.0, 4.5, 4.0], atol=1e-6, err_msg="dolly")
+
+
+def test_orbit_path_places_its_centre_by_distance_or_center():
+    from jaxrender.scene.camera_path import PATH_TYPES
+
+    build = PATH_TYPES["orbit"].build
+    cam = look_at((0, 0, 5), (0, 0, 0))  # looking down -z
+    ahead = build(cam, 2, 8, 8, degrees_per_frame=90.0, distance=2.0)
+    # a quarter turn about the point 2 ahead, (0, 0, 3), at radius 2
+    np.testing.assert_allclose(np.asarray(ahead.cameras.eye)[1], [2.0, 0.0, 3.0], atol=1e-5,
+                               err_msg="orbit about the point distance ahead")
+    about = build(cam, 2, 8, 8, degrees_per_frame=90.0, center=(0.0, 0.0, 1.0))
+    np.testing.assert_allclose(np.asarray(about.cameras.eye)[1], [4.0, 0.0, 1.0], atol=1e-5,
+                               err_msg="orbit about the given center")
+    with pytest.raises(ValueError, match="'distance' has no effect when 'center' is given"):
+        build(cam, 2, 8, 8, degrees_per_frame=90.0, distance=2.0, center=(0.0, 0.0, 1.0))

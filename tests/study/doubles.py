@@ -97,28 +97,28 @@ def render_flat(scene, camera, cfg: FlatConfig) -> Frame:
 
 
 def _np_metrics():
-    def rmse(a, b):
+    def rmse(a, b, **_):
         return float(np.sqrt(np.mean((np.asarray(a) - np.asarray(b)) ** 2)))
 
-    def psnr(a, b):
+    def psnr(a, b, **_):
         m = np.mean((np.clip(a, 0, 1) - np.clip(b, 0, 1)) ** 2)
         return float("inf") if m == 0 else float(10 * np.log10(1.0 / m))
 
-    def ssim(a, b):
+    def ssim(a, b, **_):
         return float(1.0 - np.mean(np.abs(np.asarray(a) - np.asarray(b))))
 
     def flip(ref, test):
         m = np.abs(np.asarray(test) - np.asarray(ref)).mean(-1)
         return float(m.mean()), m
 
-    def delta_e2000(a, b):
+    def delta_e2000(a, b, **_):
         return float(100 * np.mean(np.abs(np.asarray(a) - np.asarray(b)))), None
 
-    def temporal_error(i, r):
+    def temporal_error(i, r, **_):
         di, dr = np.diff(np.asarray(i), axis=0), np.diff(np.asarray(r), axis=0)
         return float(np.mean(np.abs(di - dr)))
 
-    return dict(rmse=rmse, psnr=psnr, mssim=ssim, flip=lambda t, r: flip(r, t),
+    return dict(rmse=rmse, psnr=psnr, mssim=ssim, flip=lambda t, r, **_: flip(r, t),
                 delta_e=delta_e2000, temporal_error=temporal_error)
 
 

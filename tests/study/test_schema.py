@@ -6,8 +6,9 @@ import textwrap
 import pytest
 
 from jaxrender.errors import StudyError, UserError
+from jaxrender.parsing import parse_resolution
 from jaxrender.study.schema import load_study
-from jaxrender.study.specs import parse_resolution, to_toml
+from jaxrender.study.specs import to_toml
 
 BASE = """
 name = "t"
@@ -67,6 +68,16 @@ def test_presets_compose(fake):
     assert s.variants[0].label == "coarse"
     assert dict(s.variants[0].params) == {"levels": 2, "noise": 0.5}
     assert s.scenes[0].params == (("n", 3),)
+
+
+def test_orbit_center_over_a_preset_that_sets_distance(fake):
+    """A preset's distance gives way to the entry's own center (the one that would be
+    ignored is dropped); both in the entry itself are refused (MALFORMED)."""
+    (fake / "configs" / "paths" / "round.toml").write_text(
+        'type = "orbit"\n[params]\ndegrees_per_frame = 2.0\ndistance = 3.0\n')
+    s = load_study(_write(fake, BASE + '[[paths]]\npreset = "round"\n'
+                          'params = { center = [0, 1, 0] }\n'))
+    assert dict(s.paths[0].params) == {"degrees_per_frame": 2.0, "center": (0, 1, 0)}
 
 
 def test_overrides_and_round_trip(fake, tmp_path):
@@ -143,6 +154,9 @@ MALFORMED = [
      "no camera path preset 'zoom'"),
     ("unknown path type", BASE + '[[paths]]\ntype = "spiral"\n', "paths[0].type",
      "unknown camera path type 'spiral'"),
+    ("orbit distance with center", BASE + '[[paths]]\ntype = "orbit"\nparams = { '
+     'degrees_per_frame = 1.0, distance = 2.0, center = [0, 0, 0] }\n',
+     "paths[0].params.distance", "'distance' has no effect when 'center' is given"),
     ("path frames negative", BASE + '[[paths]]\ntype = "static"\nframes = -2\n',
      "paths[0].frames", ">= 1"),
     ("unknown reference key", BASE + "[reference]\nk = 8\n", "reference.k", "unknown key"),

@@ -70,7 +70,7 @@ def test_timing_median_and_compile():
     pipe = registry.Pipeline("affine", registry.RenderConfig, registry.FrameStep(frame))
     comp = timing.compile_program(pipe, jnp.ones(4), jnp.float32(2.0),
                                   registry.RenderConfig(width=3, height=1))
-    assert comp.method == "aot" and comp.compile_ms > 0
+    assert comp.compile_ms > 0
     out, med, samples = timing.time_call(comp.call, jnp.ones(4), jnp.float32(1.0), repeats=3,
                                          warmup=1)
     assert float(out.image[0]) == 4.0 and len(samples) == 3 and min(samples) <= med <= max(samples)
