@@ -212,10 +212,10 @@ def render(pipe, scene, camera, cfg, *, t=0) -> Frame:
     return frame if _is_traced(scene, camera, t) else check_overflow(pipe, cfg, frame)
 
 
-def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0) -> Frame:
-    """Frames 0, 1, ... of a camera path through ``pipe``'s steps, state carried, warm-up
-    dropped."""
-    fixed, args, _ = _arguments(pipe, scene, cameras, cfg, True, warmup_frames)
+def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0, start=0) -> Frame:
+    """Frames ``start``, ``start + 1``, ... of a camera path through ``pipe``'s steps, state
+    carried, warm-up dropped."""
+    fixed, args, _ = _arguments(pipe, scene, cameras, cfg, True, warmup_frames, start)
     frames = _program_jit(*fixed, *args)
     return frames if _is_traced(*args) else check_overflow(pipe, cfg, frames)
 
@@ -228,14 +228,16 @@ def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: i
 
 
 def bind(pipe, cfg, compiled, prepared: Prepared) -> Callable:
-    """``call(scene, cameras) -> Frame``: the compiled program with its prepared arguments,
-    overflow-checked like ``render``."""
+    """``call(scene, cameras, t=None) -> Frame``: the compiled program with its prepared
+    arguments, overflow-checked like ``render``."""
 
-    def call(scene, cameras):
+    def call(scene, cameras, t=None):
+        """``t``: the frame index of the (first) frame; default: the one it was lowered for."""
         if prepared.sequence:
             cameras = stack_cameras(cameras)
+        start = prepared.start if t is None else t
         frame = compiled(scene, prepared.static, cameras, prepared.traced,
-                         jnp.asarray(prepared.start, jnp.int32))
+                         jnp.asarray(start, jnp.int32))
         return check_overflow(pipe, cfg, frame)
 
     return call

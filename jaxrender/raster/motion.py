@@ -19,7 +19,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from jaxrender.scene.camera import Camera, without_jitter, world_to_clip
-from jaxrender.scene.reprojection import linear_depth
+from jaxrender.scene.reprojection import Reprojection, linear_depth
 from jaxrender.types import Array
 
 
@@ -61,6 +61,34 @@ def previous_position(motion: Array) -> Array:
     return centre + motion
 
 
+def _jitter_px(camera: Camera, width: int, height: int) -> Array:
+    if camera.jitter is None:
+        return jnp.zeros((2,), jnp.float32)
+    return jnp.stack([camera.jitter[0] * (0.5 * width), -camera.jitter[1] * (0.5 * height)])
+
+
+def reproject_with_motion(motion: Array, prev_depth: Array, covered: Array, camera: Camera,
+                          prev_camera: Camera, prev_depth_buffer: Array | None,
+                          tolerance) -> Reprojection:
+    """``scene.reprojection.reproject`` from motion vectors: where each covered pixel's surface
+    point was in the previous frame as it was rendered (its projection jitter included), valid
+    where on screen, in front of that camera and, with ``prev_depth_buffer``, not hidden there
+    (the nearest pixel's linear depth within ``tolerance`` relative). Moving objects reproject
+    where camera-only reprojection cannot."""
+    h, w = covered.shape
+    shift = _jitter_px(prev_camera, w, h) - _jitter_px(camera, w, h)
+    position = previous_position(motion) + shift[None, None, :]
+    px, py = position[..., 0], position[..., 1]
+    valid = covered & (prev_depth < 1.0) & (px >= 0.0) & (px <= w) & (py >= 0.0) & (py <= h)
+    if prev_depth_buffer is not None:
+        ix = jnp.clip(jnp.floor(px), 0, w - 1).astype(jnp.int32)
+        iy = jnp.clip(jnp.floor(py), 0, h - 1).astype(jnp.int32)
+        seen = linear_depth(prev_depth_buffer[iy, ix], prev_camera)
+        expected = linear_depth(prev_depth, prev_camera)
+        valid = valid & (jnp.abs(seen - expected) <= tolerance * jnp.abs(expected))
+    return Reprojection(position, valid, prev_depth)
+
+
 def disoccluded(position: Array, prev_depth: Array, objects: Array, prev_depth_buffer: Array,
                 prev_objects: Array, prev_camera: Camera, tolerance: float) -> Array:
     """bool[H, W]: the previous frame did not show this pixel's surface. ``position``: its
@@ -95,4 +123,4 @@ def disoccluded(position: Array, prev_depth: Array, objects: Array, prev_depth_b
     return ~(seen & on_screen)
 
 
-__all__ = ["disoccluded", "motion_vectors", "previous_position"]
+__all__ = ["disoccluded", "motion_vectors", "previous_position", "reproject_with_motion"]

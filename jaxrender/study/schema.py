@@ -17,7 +17,7 @@ from pathlib import Path
 
 from jaxrender import catalog
 from jaxrender.errors import StudyError, UserError
-from jaxrender.metrics import METRICS
+from jaxrender.metrics import DEFAULT_METRICS, METRICS
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED
 from jaxrender.study import backend
 from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
@@ -315,7 +315,7 @@ def parse_study(data: dict, file: str, *, study_dir: Path, configs: Path | None 
     except FileNotFoundError as e:
         raise UserError(f"--configs: {e}") from None
     d = read_table(ck, data, "", Study, extra={"frames": 1},
-                   defaults={"name": Path(file).stem, "metrics": list(METRICS),
+                   defaults={"name": Path(file).stem, "metrics": list(DEFAULT_METRICS),
                              "figures": list(FIGURES), "save_frames": [0]})
     if not all(c.isalnum() or c in "-_." for c in d["name"]):
         ck.fail("name", f"use letters, digits, '-', '_' or '.', got {d['name']!r}")
