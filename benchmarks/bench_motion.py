@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from functools import partial
 
 import jax
 import jax.numpy as jnp
@@ -76,6 +77,10 @@ def bench_visibility(scene, path, cfg, repeats):
     return rows, vis, (posed, cam, prev_pos, prev)
 
 
+def _resolved(current, vis, objects, hist, camera, *, cfg):
+    return resolve(current, vis, objects, hist, camera, cfg).image
+
+
 def bench_resolve(scene, path, cfg_w, cfg_h, inputs, repeats):
     posed, cam, prev_pos, prev = inputs
     vis_cfg = PipelineConfig(width=cfg_w, height=cfg_h)
@@ -89,8 +94,8 @@ def bench_resolve(scene, path, cfg_w, cfg_h, inputs, repeats):
         for clip in ("clamp", "variance"):
             cfg = make_config("deferred", width=cfg_w, height=cfg_h, taa=True,
                               taa_history=history, taa_clip=clip)
-            fn = lambda cur, v, o, hh, c, cfg=cfg: resolve(cur, v, o, hh, c, cfg).image  # noqa: E731
-            r = time_compiled(fn, image, vis, objects, hist, cam, repeats=repeats)
+            r = time_compiled(partial(_resolved, cfg=cfg), image, vis, objects, hist, cam,
+                              repeats=repeats)
             r.pop("out")
             rows.append(dict(stage="taa_resolve", variant=f"{history}+{clip}", **r))
     return rows
