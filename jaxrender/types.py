@@ -107,6 +107,10 @@ class VisBuffer(_Ids):
               (``fragments``: covered (pixel, triangle) pairs; ``work_items``: pixel tests
               run; ``clipped``: triangles that crossed a clip plane; ``dropped_nonfinite``:
               triangles dropped for a NaN or infinite vertex).
+    motion:   float32[H, W, 2] or None: on request (``pipelines.visibility`` with a previous
+              frame), the window offset to where each pixel's surface point was in the
+              previous frame (``raster.motion``; x right, y down, 0 where empty).
+    prev_depth: float32[H, W] or None: that point's window depth in the previous frame.
     """
 
     tri_id: Array
@@ -115,6 +119,8 @@ class VisBuffer(_Ids):
     dbary_dx: Array
     dbary_dy: Array
     counts: Mapping = field(default_factory=dict)
+    motion: Array | None = None
+    prev_depth: Array | None = None
 
 
 @pytree_dataclass

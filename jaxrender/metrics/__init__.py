@@ -9,7 +9,7 @@ from jaxrender.metrics.color import ciede2000, delta_e2000, srgb_to_lab
 from jaxrender.metrics.display import srgb_decode, srgb_encode, to_display
 from jaxrender.metrics.error import mse, psnr, rmse
 from jaxrender.metrics.flip import DEFAULT_PPD, exposure_range, flip
-from jaxrender.metrics.registry import METRICS, Metric
+from jaxrender.metrics.registry import DEFAULT_METRICS, METRICS, Metric
 from jaxrender.metrics.ssim import ssim
 from jaxrender.metrics.suite import IMAGE_METRICS, image_metrics
 from jaxrender.metrics.temporal import (
@@ -24,6 +24,7 @@ from jaxrender.metrics.temporal import (
 
 __all__ = [
     "DEFAULT_PPD",
+    "DEFAULT_METRICS",
     "IMAGE_METRICS",
     "METRICS",
     "Metric",

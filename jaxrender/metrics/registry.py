@@ -6,11 +6,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from jaxrender.metrics.color import delta_e2000
 from jaxrender.metrics.error import psnr, rmse
 from jaxrender.metrics.flip import flip
 from jaxrender.metrics.ssim import ssim
-from jaxrender.metrics.temporal import temporal_error
+from jaxrender.metrics.temporal import temporal_error, warp_error
 
 
 @dataclass(frozen=True)
@@ -18,16 +20,31 @@ class Metric:
     """A metric a study may ask for by ``name``, the column its value gets in the results.
     ``fn(test, reference, dtype=...)`` takes display-referred images, (H, W, 3), or (T, H, W, 3) for a
     ``sequence`` metric, and returns a value or (value, per-pixel map); the map of the
-    ``error_map`` metric is the one the figures show."""
+    ``error_map`` metric is the one the figures show. A ``motion`` metric also takes the
+    sequence's motion field, ``fn(test, reference, motion)`` (a Reprojection of frames 1..T-1
+    into their previous frames, ``pipelines.motion_field``). ``default``: computed when a study
+    names no metrics (the motion field is a render pass of its own)."""
 
     name: str
     fn: Callable
     sequence: bool = False
     error_map: bool = False
+    motion: bool = False
+    default: bool = True
 
 
 def _flip(test, reference, **kw):
     return flip(reference, test, **kw)
+
+
+def _mean_flip(test, reference, **kw):
+    """The mean over frames of each frame's FLIP."""
+    return float(np.mean(np.asarray(flip(reference, test, **kw)[0], np.float64)))
+
+
+def _warp_error(test, reference, motion, **kw):
+    """The motion-compensated warping error relative to the reference's own."""
+    return warp_error(test, reference, motion, **kw).relative
 
 
 METRICS: dict[str, Metric] = {m.name: m for m in (
@@ -37,4 +54,7 @@ METRICS: dict[str, Metric] = {m.name: m for m in (
     Metric("flip", _flip, error_map=True),
     Metric("delta_e", delta_e2000),
     Metric("temporal_error", temporal_error, sequence=True),
+    Metric("warp_error", _warp_error, sequence=True, motion=True, default=False),
+    Metric("mean_flip", _mean_flip, sequence=True, default=False),
 )}
+DEFAULT_METRICS = tuple(n for n, m in METRICS.items() if m.default)

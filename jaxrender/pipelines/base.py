@@ -45,6 +45,7 @@ class PipelineConfig(RenderConfig):
     OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ("chunk", "fragment_capacity")
 
     def __post_init__(self):
+        super().__post_init__()
         if int(self.chunk) < 0:
             raise ValueError(f"chunk must be >= 0 (0: automatic), got {self.chunk}")
         if int(self.fragment_capacity) < 0:

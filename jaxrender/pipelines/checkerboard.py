@@ -12,7 +12,8 @@ reconstructed and is shaded as well (counted).
 Reconstruction of a missing pixel, geometry-aware from a full-resolution visibility pass:
 
 - temporal (``temporal = true``, frames t >= 1 of a sequence): the pixel is reprojected into
-  frame t-1 through the known camera motion (``scene.reprojection.reproject``) and, of the 2x2
+  frame t-1 through the known camera motion (``scene.reprojection.reproject``), or in a moving
+  scene through its motion vectors (``raster.motion.reproject_with_motion``), and, of the 2x2
   pixels around that point, the nearest one shaded in frame t-1 with the same surface id is taken,
   unless the point is off screen or its depth disagrees (disocclusion); then
 - spatial: the mean of the 4 neighbours (all shaded this frame) that show the same surface id;
@@ -45,8 +46,10 @@ from jaxrender.pipelines.pixel_ids import (
     surface_ids,
 )
 from jaxrender.pipelines.registry import REGISTRY, register
-from jaxrender.pipelines.visibility import points_from_vis, visibility
+from jaxrender.pipelines.visibility import Previous, points_from_vis, visibility
 from jaxrender.pipelines.waves import check_wave_size, tile_waves
+from jaxrender.raster.motion import reproject_with_motion
+from jaxrender.scene.animation import positions_at
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.reprojection import DEFAULT_DEPTH_TOLERANCE, reproject
 from jaxrender.types import Array, Frame
@@ -210,8 +213,12 @@ def reconstruct(img, vis, ids, camera, prev: History, plan: CheckerPlan,
         spatial = _spatial(img, ids, vis.depth, plan.neighbours)
     with jax.named_scope("temporal"):
         if cfg.temporal:
-            rp = reproject(vis.depth, camera, prev.camera, w, h, prev_depth=prev.depth,
-                           depth_tolerance=cfg.depth_tolerance)
+            if vis.motion is not None:  # a moving scene: its motion vectors
+                rp = reproject_with_motion(vis.motion, vis.prev_depth, plan.covered, camera,
+                                           prev.camera, prev.depth, cfg.depth_tolerance)
+            else:
+                rp = reproject(vis.depth, camera, prev.camera, w, h, prev_depth=prev.depth,
+                               depth_tolerance=cfg.depth_tolerance)
             hist_colour, hist_ok = _history_sample(prev, rp.position, ids)
             hist_ok = hist_ok & rp.valid
             use_hist = missing & hist_ok
@@ -228,7 +235,9 @@ def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
     """One frame at traced index ``t`` given the previous frame's History (ignored when
     ``prev.valid`` is False or ``cfg.temporal`` is off). Returns (Frame, History)."""
     with jax.named_scope("visibility"):
-        vis = visibility(scene, camera, cfg)
+        moving = cfg.temporal and scene.effects.motion
+        previous = Previous(positions_at(scene, t - 1), prev.camera) if moving else None
+        vis = visibility(scene, camera, cfg, previous=previous)
         ids = surface_ids(scene, vis.tri_id, cfg.ids)
     with jax.named_scope("plan"):
         plan = plan_checker(vis, t, cfg)

@@ -210,6 +210,8 @@ def plan_store(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
     with jax.named_scope("reuse"):
         view_dependent = bool(scene.effects.specular)
         same_inputs = jnp.all(state.eye == camera.eye) if view_dependent else jnp.bool_(True)
+        if scene.effects.motion:  # moving surfaces are lit anew
+            same_inputs = jnp.bool_(False)
         may_reuse = ~shade_frame | (same_inputs & cfg.reuse)
         prev = state.page[v_of_slot]
         reused = live & (prev >= 0) & may_reuse  # [cap]

@@ -29,7 +29,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+import jaxrender.pipelines.taa as taa
+from jaxrender.scene.animation import pose
 from jaxrender.scene.camera import Camera
+from jaxrender.shading.shadow import with_shadow_map
 from jaxrender.types import Frame
 
 
@@ -71,22 +74,48 @@ def _first(cameras: Camera) -> Camera:
     return jax.tree_util.tree_map(lambda a: a[0], cameras)
 
 
-def _program(pipe, static_cfg, mode, scene, static, cameras, traced):
+def _posed(scene, t):
+    """The scene at frame ``t``; a moving scene's shadow map follows its objects."""
+    if getattr(scene, "animation", None) is None:  # a scene of another kind (a test double)
+        return scene
+    with jax.named_scope("animation"):
+        posed = pose(scene, t)
+        return with_shadow_map(posed) if posed.shadow is not None else posed
+
+
+def _init(pipe, scene, static, camera, cfg):
+    if not cfg.taa:
+        return pipe.init(scene, static, camera, cfg)
+    return (pipe.init(scene, static, taa.jittered(camera, jnp.int32(0), cfg), cfg),
+            taa.init(scene, camera, cfg))
+
+
+def _step(pipe, scene, static, state, camera, t, cfg):
+    """Frame ``t`` of the scene posed at ``t``, through the pipeline and, with ``taa``, the
+    temporal resolve."""
+    posed = _posed(scene, t)
+    if cfg.taa:
+        return taa.step(pipe, posed, static, state, camera, t, cfg)
+    return pipe.step(posed, static, state, camera, t, cfg)
+
+
+def _program(pipe, static_cfg, mode, scene, static, cameras, traced, start):
     cfg = join_config(static_cfg, traced)
     if mode == "frame":
-        state = pipe.init(scene, static, cameras, cfg)
-        frame, _ = pipe.step(scene, static, state, cameras, jnp.int32(0), cfg)
+        state = _init(pipe, scene, static, cameras, cfg)
+        frame, _ = _step(pipe, scene, static, state, cameras, start, cfg)
         return frame
     _, skip = mode
     n = int(np.shape(jax.tree_util.tree_leaves(cameras)[0])[0])
 
     def body(state, xs):
         camera, t = xs
-        frame, state = pipe.step(scene, static, state, camera, t, cfg)
+        frame, state = _step(pipe, scene, static, state, camera, t, cfg)
         return state, frame
 
-    state = pipe.init(scene, static, _first(cameras), cfg)
-    _, frames = jax.lax.scan(body, state, (cameras, jnp.arange(n, dtype=jnp.int32)))
+    state = _init(pipe, scene, static, _first(cameras), cfg)
+    ts = start + jnp.arange(n, dtype=jnp.int32)
+    _, frames = jax.lax.scan(body, state, (cameras, ts))
     return jax.tree_util.tree_map(lambda a: a[skip:], frames) if skip else frames
 
 
@@ -159,31 +188,35 @@ class Prepared:
     static: Any
     traced: dict
     sequence: bool
+    start: int = 0
 
 
-def _arguments(pipe, scene, cameras, cfg, sequence: bool, warmup_frames: int):
+def _arguments(pipe, scene, cameras, cfg, sequence: bool, warmup_frames: int, start=0):
     """(static jit arguments, dynamic arguments, Prepared) of ``pipe``'s program; host-side
-    preparation happens here."""
+    preparation happens here. ``start``: the frame index (animation clock) of the first frame."""
     if sequence:
         cameras = stack_cameras(cameras)
     n = int(np.shape(cameras.eye)[0]) if sequence else 1
     mode = _mode(sequence, warmup_frames, n)
     static = pipe.prepare(scene, cfg)
     static_cfg, traced = split_config(cfg)
-    return ((pipe, static_cfg, mode), (scene, static, cameras, traced),
-            Prepared(static, traced, sequence))
+    t0 = jnp.asarray(start, jnp.int32)
+    return ((pipe, static_cfg, mode), (scene, static, cameras, traced, t0),
+            Prepared(static, traced, sequence, start))
 
 
-def render(pipe, scene, camera, cfg) -> Frame:
-    """One frame of ``pipe`` from its initial state, overflow-checked."""
-    fixed, args, _ = _arguments(pipe, scene, camera, cfg, False, 0)
+def render(pipe, scene, camera, cfg, *, t=0) -> Frame:
+    """Frame ``t`` of ``pipe`` (the scene posed at ``t``; with TAA, its jitter phase) from its
+    initial state, overflow-checked. ``t`` is traced: another frame does not recompile."""
+    fixed, args, _ = _arguments(pipe, scene, camera, cfg, False, 0, t)
     frame = _program_jit(*fixed, *args)
-    return frame if _is_traced(scene, camera) else check_overflow(pipe, cfg, frame)
+    return frame if _is_traced(scene, camera, t) else check_overflow(pipe, cfg, frame)
 
 
-def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0) -> Frame:
-    """Frames of a camera path through ``pipe``'s steps, state carried, warm-up dropped."""
-    fixed, args, _ = _arguments(pipe, scene, cameras, cfg, True, warmup_frames)
+def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0, start=0) -> Frame:
+    """Frames ``start``, ``start + 1``, ... of a camera path through ``pipe``'s steps, state
+    carried, warm-up dropped."""
+    fixed, args, _ = _arguments(pipe, scene, cameras, cfg, True, warmup_frames, start)
     frames = _program_jit(*fixed, *args)
     return frames if _is_traced(*args) else check_overflow(pipe, cfg, frames)
 
@@ -208,13 +241,16 @@ def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: i
 
 
 def bind(pipe, cfg, compiled, prepared: Prepared) -> Callable:
-    """``call(scene, cameras) -> Frame``: the compiled program with its prepared arguments,
-    overflow-checked like ``render``."""
+    """``call(scene, cameras, t=None) -> Frame``: the compiled program with its prepared
+    arguments, overflow-checked like ``render``."""
 
-    def call(scene, cameras):
+    def call(scene, cameras, t=None):
+        """``t``: the frame index of the (first) frame; default: the one it was lowered for."""
         if prepared.sequence:
             cameras = stack_cameras(cameras)
-        frame = compiled(scene, prepared.static, cameras, prepared.traced)
+        start = prepared.start if t is None else t
+        frame = compiled(scene, prepared.static, cameras, prepared.traced,
+                         jnp.asarray(start, jnp.int32))
         return check_overflow(pipe, cfg, frame)
 
     return call

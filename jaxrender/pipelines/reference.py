@@ -69,6 +69,7 @@ class ReferenceConfig(RenderConfig):
     OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ()
 
     def __post_init__(self):
+        super().__post_init__()
         if int(self.k) < 1:
             raise ValueError(f"reference: k must be >= 1, got {self.k}")
         if int(self.chunk) < 0:

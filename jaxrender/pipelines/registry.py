@@ -33,15 +33,50 @@ from typing import Callable, ClassVar
 import jaxrender.pipelines.program as program
 
 
+TAA_HISTORY_FILTERS = ("bilinear", "catmull_rom")
+TAA_CLIPS = ("clamp", "variance")
+TAA_PHASES = (8, 16)
+
+
 @dataclass(frozen=True)
 class RenderConfig:
-    """Static settings shared by every pipeline: the output resolution in pixels."""
+    """Static settings shared by every pipeline: the output resolution in pixels, and the
+    temporal anti-aliasing any pipeline can add after its resolve (``pipelines.taa``):
+
+    taa: jitter the projection and blend each frame into the reprojected history.
+    taa_alpha: weight of the new frame in the exponential blend, in (0, 1].
+    taa_phases: length of the Halton(2, 3) jitter sequence (8 or 16).
+    taa_history: how the history is sampled at the motion vector: bilinear or catmull_rom.
+    taa_clip: how the history is bounded by the new frame's 3x3 neighbourhood in YCoCg: clamp
+        (to its min/max box) or variance (clipped towards its mean, into mean +- sigma).
+    The taa_* settings are refused without ``taa``."""
 
     width: int = 320
     height: int = 180
+    taa: bool = False
+    taa_alpha: float = 0.1
+    taa_phases: int = 8
+    taa_history: str = "bilinear"
+    taa_clip: str = "clamp"
 
     TRACED_FIELDS: ClassVar[tuple[str, ...]] = ()
     OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ()
+
+    def __post_init__(self):
+        if not (0.0 < float(self.taa_alpha) <= 1.0):
+            raise ValueError(f"taa_alpha must be in (0, 1], got {self.taa_alpha}")
+        if int(self.taa_phases) not in TAA_PHASES:
+            raise ValueError(f"taa_phases must be 8 or 16, got {self.taa_phases}")
+        if self.taa_history not in TAA_HISTORY_FILTERS:
+            raise ValueError(f"taa_history must be one of {', '.join(TAA_HISTORY_FILTERS)}, "
+                             f"got {self.taa_history!r}")
+        if self.taa_clip not in TAA_CLIPS:
+            raise ValueError(f"taa_clip must be one of {', '.join(TAA_CLIPS)}, "
+                             f"got {self.taa_clip!r}")
+        if not self.taa:
+            for f in dataclasses.fields(RenderConfig):
+                if f.name.startswith("taa_") and getattr(self, f.name) != f.default:
+                    raise ValueError(f"{f.name} has no effect without taa = true")
 
     def overflow_hint(self) -> str:
         """What to raise when a frame of this config overflows (part of the error message)."""
@@ -76,9 +111,10 @@ class Pipeline:
         """Has host-side preparation per scene (object-space sheets)."""
         return self.prepare is not no_prepare
 
-    def render(self, scene, camera, cfg):
-        """One frame from ``init`` (frame index 0): a Frame with image (H, W, 3)."""
-        return program.render(self, scene, camera, cfg)
+    def render(self, scene, camera, cfg, *, t=0):
+        """Frame ``t`` (default 0: the scene's animation clock and TAA's jitter phase) from
+        ``init``: a Frame with image (H, W, 3)."""
+        return program.render(self, scene, camera, cfg, t=t)
 
     def render_sequence(self, scene, cameras, cfg, *, warmup_frames: int = 0):
         """Frames of a camera path (CameraPath, a Camera batched over a leading axis T, or a

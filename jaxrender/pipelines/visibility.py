@@ -8,12 +8,16 @@ argument preparation (the validation is the scene loader's job here).
 
 from __future__ import annotations
 
+import dataclasses
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 import jaxrender.raster.samples as sample_patterns
 from jaxrender.raster.fragments import Fragments, fragments_jit
+from jaxrender.raster.motion import motion_vectors
 from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
                                         rasterize_traced)
 from jaxrender.raster.resolve import barycentrics, pair_barycentrics
@@ -71,9 +75,19 @@ def points_from_vis(scene: Scene, camera: Camera, vis: VisBuffer, items: Array) 
                           flat(vis.dbary_dx)[items], flat(vis.dbary_dy)[items])
 
 
-def visibility(scene: Scene, camera: Camera, cfg, sample_offsets=None) -> VisBuffer:
+class Previous(NamedTuple):
+    """The previous frame, for motion vectors: the scene's vertex positions float32[V, 3] at
+    that frame (``animation.positions_at``) and its camera."""
+
+    positions: Array
+    camera: Camera
+
+
+def visibility(scene: Scene, camera: Camera, cfg, sample_offsets=None, *,
+               previous: Previous | None = None) -> VisBuffer:
     """The nearest surviving surface at each pixel (or sample): a VisBuffer of shape (H, W), or
-    (S, H, W) for S > 1 ``sample_offsets``.
+    (S, H, W) for S > 1 ``sample_offsets``; with ``previous``, with its motion vectors and
+    previous depth (``raster.motion``), else without (none computed).
 
     Without the alpha-test effect this is the rasterizer's own visibility. With it, every
     fragment is listed; fragments of alpha-tested materials that could be visible (not behind
@@ -82,6 +96,17 @@ def visibility(scene: Scene, camera: Camera, cfg, sample_offsets=None) -> VisBuf
     key orders them. Counts add ``alpha_invocations`` and ``overflow`` (fragments past
     ``cfg.capacity``).
     """
+    vis = _nearest(scene, camera, cfg, sample_offsets)
+    if previous is None:
+        return vis
+    with jax.named_scope("motion_vectors"):
+        motion, prev_depth = motion_vectors(vis.tri_id, vis.bary, scene.faces, scene.positions,
+                                            camera, previous.positions, previous.camera,
+                                            cfg.width, cfg.height)
+    return dataclasses.replace(vis, motion=motion, prev_depth=prev_depth)
+
+
+def _nearest(scene: Scene, camera: Camera, cfg, sample_offsets) -> VisBuffer:
     offsets = sample_patterns.validate(sample_offsets or sample_patterns.CENTER)
     cull = bool(getattr(cfg, "cull_backfaces", False))
     if not scene.effects.alpha_test:

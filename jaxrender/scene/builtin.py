@@ -6,10 +6,12 @@ Defaults are small enough for a 2-core CPU; docstrings give the large settings.
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 
 import numpy as np
 
+from jaxrender.scene.animation import ObjectMotion
 from jaxrender.scene.camera import look_at
 from jaxrender.scene.lights import make_lights
 from jaxrender.scene.materials import Material
@@ -73,15 +75,23 @@ def stripes(*, plane_size: float = 400.0, subdivisions: int = 8,
                        name="stripes", description=stripes.__doc__.splitlines()[0])
 
 
-def spheres(*, rows: int = 3, cols: int = 4, lat: int = 12, lon: int = 24) -> Scene:
-    """A grid of Blinn-Phong spheres, exponents 1 to 4096 (specular aliasing)."""
+def spheres(*, rows: int = 3, cols: int = 4, lat: int = 12, lon: int = 24,
+            spin_deg_per_s: float = 0.0) -> Scene:
+    """A grid of Blinn-Phong spheres, exponents 1 to 4096 (specular aliasing).
+
+    ``spin_deg_per_s``: each sphere spins about its own vertical axis (alternating direction),
+    so the highlights stay while the surface, its uvs and its shading rate move under them."""
     n = rows * cols
     exps = np.geomspace(1.0, 4096.0, n)
     parts, mats = [], []
     for k in range(n):
         r, c = divmod(k, cols)
         s = uv_sphere(0.45, lat, lon, material=k)
-        parts.append(s.transformed(trs_matrix(translate=(c - (cols - 1) / 2, (rows - 1) / 2 - r + 1.0, 0))))
+        s = s.transformed(trs_matrix(translate=(c - (cols - 1) / 2, (rows - 1) / 2 - r + 1.0, 0)))
+        if spin_deg_per_s:
+            s.motion = ObjectMotion(spin_axis=(0.2, 1.0, 0.0),
+                                    spin_deg_per_s=float(spin_deg_per_s) * (-1) ** k)
+        parts.append(s)
         mats.append(Material(f"phong{exps[k]:.0f}", albedo=(0.5, 0.1, 0.1), specular=(0.5, 0.5, 0.5),
                              shininess=float(exps[k]), brdf="blinn_phong"))
     mats.append(Material("floor", albedo=(0.3, 0.3, 0.3)))
@@ -93,20 +103,44 @@ def spheres(*, rows: int = 3, cols: int = 4, lat: int = 12, lon: int = 24) -> Sc
                        description=spheres.__doc__.splitlines()[0])
 
 
-def foliage(*, n_cards: int = 200, card_size: float = 0.3, seed: int = 0) -> Scene:
-    """Many small alpha-tested leaf cards over a ground plane (overdraw, tiny triangles)."""
+def spheres_spin(*, rows: int = 3, cols: int = 4, lat: int = 12, lon: int = 24,
+                 spin_deg_per_s: float = 90.0) -> Scene:
+    """The spheres, each spinning (rigid motion under fixed lights: motion vectors, TAA)."""
+    scene = spheres(rows=rows, cols=cols, lat=lat, lon=lon, spin_deg_per_s=spin_deg_per_s)
+    return dataclasses.replace(scene, name="spheres_spin",
+                               description=spheres_spin.__doc__.splitlines()[0])
+
+
+def foliage(*, n_cards: int = 200, card_size: float = 0.3, seed: int = 0,
+            wind: float = 0.0) -> Scene:
+    """Many small alpha-tested leaf cards over a ground plane (overdraw, tiny triangles).
+
+    ``wind``: the leaves sway along +x by up to ``wind`` world units at 2.5 units above the
+    ground, the displacement growing with the square of the height (the ground stays)."""
     rng = np.random.default_rng(seed)
     parts = [grid_plane((6, 6), material=1)]
     for k in range(n_cards):
         q = grid_plane((card_size, card_size))
         m = trs_matrix(translate=rng.uniform([-2, 0.2, -2], [2, 2.5, 2]),
                        rotate_deg=rng.uniform(0, 360, 3))
-        parts.append(q.transformed(m))
+        q = q.transformed(m)
+        if wind:
+            q.motion = ObjectMotion(sway_amplitude=float(wind), sway_height=2.5, sway_base=0.0,
+                                    sway_direction=(1.0, 0.0, 0.3), sway_frequency_hz=0.7)
+        parts.append(q)
     mats = [Material("leaf", albedo=(1, 1, 1), texture=0, alpha_tested=True, alpha_cutoff=0.5),
             Material("ground", albedo=(0.35, 0.25, 0.15))]
     cam = look_at((0, 1.5, 5), (0, 1.2, 0), fov_y_deg=50)
     return build_scene(parts, mats, [leaf_image()], make_lights([_SUN], ambient=0.1), cam,
                        name="foliage", description=foliage.__doc__.splitlines()[0])
+
+
+def foliage_wind(*, n_cards: int = 200, card_size: float = 0.3, seed: int = 0,
+                 wind: float = 0.05) -> Scene:
+    """The foliage swaying in the wind (vertex animation growing with height, as Decima's)."""
+    scene = foliage(n_cards=n_cards, card_size=card_size, seed=seed, wind=wind)
+    return dataclasses.replace(scene, name="foliage_wind",
+                               description=foliage_wind.__doc__.splitlines()[0])
 
 
 def thin(*, n_wires: int = 24, fence_bars: int = 40, width: float = 0.004) -> Scene:
@@ -226,7 +260,8 @@ def many_small(*, n_triangles: int = 20_000, size: float = 4.0, point_lights: in
                        name="many_small", description=many_small.__doc__.splitlines()[0])
 
 
-BUILTINS = {f.__name__: f for f in (stripes, spheres, foliage, thin, terrain, sliver, room, many_small)}
+BUILTINS = {f.__name__: f for f in (stripes, spheres, foliage, thin, terrain, sliver, room, many_small,
+                                     foliage_wind, spheres_spin)}
 
 
 def list_builtin_scenes() -> list[tuple[str, str]]:

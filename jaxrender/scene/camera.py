@@ -9,6 +9,8 @@ reduced-precision matrix unit (TF32 on a GPU) touches geometry.
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax.numpy as jnp
 import numpy as np
 
@@ -18,13 +20,16 @@ from jaxrender.types import Array, pytree_dataclass
 @pytree_dataclass
 class Camera:
     """eye float32[3]; rotation float32[3, 3] world -> camera (rows: right, up, backward);
-    fov_y float32[] vertical field of view in radians; near, far float32[] clip distances."""
+    fov_y float32[] vertical field of view in radians; near, far float32[] clip distances;
+    jitter float32[2] or None: a sub-pixel offset of the projection in NDC units (x right, y
+    up), as TAA shifts it; None (the default) compiles no offset."""
 
     eye: Array
     rotation: Array
     fov_y: Array
     near: Array
     far: Array
+    jitter: Array | None = None
 
     @property
     def forward(self) -> Array:
@@ -70,7 +75,20 @@ def view_to_clip(view: Array, camera: Camera, aspect: float) -> Array:
     n, fa = camera.near, camera.far
     x, y, z = view[..., 0], view[..., 1], view[..., 2]
     zc = (fa + n) / (n - fa) * z + (2.0 * fa * n) / (n - fa)
-    return jnp.stack([f / aspect * x, f * y, zc, -z], axis=-1)
+    xc, yc = f / aspect * x, f * y
+    if camera.jitter is not None:  # x_ndc + jx = (xc + jx * w) / w, with w = -z
+        xc, yc = xc - camera.jitter[..., 0] * z, yc - camera.jitter[..., 1] * z
+    return jnp.stack([xc, yc, zc, -z], axis=-1)
+
+
+def without_jitter(camera: Camera) -> Camera:
+    return dataclasses.replace(camera, jitter=None) if camera.jitter is not None else camera
+
+
+def with_jitter_px(camera: Camera, offset_px: Array, width: int, height: int) -> Camera:
+    """The camera with its projection shifted by ``offset_px`` (x right, y down, pixels)."""
+    ndc = jnp.stack([2.0 * offset_px[0] / width, -2.0 * offset_px[1] / height])
+    return dataclasses.replace(camera, jitter=ndc.astype(jnp.float32))
 
 
 def world_to_clip(points: Array, camera: Camera, aspect: float) -> Array:

@@ -4,6 +4,7 @@
 name = "demo"                      # optional, defaults to the file stem
 description = "one line"
 texture_resolution = 256           # optional power of two
+fps = 60                           # optional: the frame rate of the animation clock
 shadows = true                     # optional: shadow map of the first directional light
 
 [camera]                           # required
@@ -25,6 +26,12 @@ uv_scale = [4, 4]                  # plane only
 material = "floor"                 # optional override (a file's own materials otherwise)
 translate = [0, 0, 0]              # also rotate_deg = [x, y, z], scale = s or [sx, sy, sz],
                                    # velocity = [vx, vy, vz] (world units per frame)
+[meshes.motion]                    # optional animation of this mesh (times in seconds)
+spin_axis = [0, 1, 0]              # spin_deg_per_s, pivot (default: the mesh's centre),
+spin_deg_per_s = 90                # velocity (units/s), orbit_center, orbit_axis,
+                                   # orbit_deg_per_s, sway_amplitude, sway_direction,
+                                   # sway_frequency_hz, sway_wavelength, sway_height,
+                                   # sway_exponent, sway_base (see scene.animation)
 [[lights]]
 type = "directional"               # direction (towards the light), irradiance
 direction = [0.3, 1, 0.2]
@@ -44,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
+from jaxrender.scene.animation import DEFAULT_FPS, ObjectMotion
 from jaxrender.scene.camera import look_at
 from jaxrender.scene.effects import BRDF_NAMES, EFFECT_FIELDS, PROCEDURAL_NAMES
 from jaxrender.scene.lights import make_lights
@@ -102,7 +110,7 @@ NUM, INT, STR, BOOL = (_of((int, float), "a number"), _of(int, "an integer"),
                        _of(str, "a string"), _of(bool, "a boolean"))
 VEC3 = _vec(3)
 
-TOP = {"name": STR, "description": STR, "texture_resolution": INT, "shadows": BOOL,
+TOP = {"name": STR, "description": STR, "texture_resolution": INT, "shadows": BOOL, "fps": NUM,
        "camera": None, "materials": None, "meshes": None, "lights": None, "effects": None}
 CAMERA = {"eye": VEC3, "target": VEC3, "up": VEC3, "fov_y_deg": NUM, "near": NUM, "far": NUM}
 MATERIAL = {"name": STR, "albedo": VEC3, "specular": VEC3, "shininess": NUM, "roughness": NUM,
@@ -116,7 +124,11 @@ def _size(v):
 _size.__doc__ = "a number or a list of 2 or 3 numbers"
 MESH = {"file": STR, "primitive": _choice({"plane", "box", "sphere"}), "size": _size,
         "subdivisions": INT, "uv_scale": _vec(2), "material": STR, "translate": VEC3,
-        "rotate_deg": VEC3, "scale": _num_or_vec(3), "velocity": VEC3}
+        "rotate_deg": VEC3, "scale": _num_or_vec(3), "velocity": VEC3, "motion": None}
+MOTION = {"spin_axis": VEC3, "spin_deg_per_s": NUM, "pivot": VEC3, "velocity": VEC3,
+          "orbit_center": VEC3, "orbit_axis": VEC3, "orbit_deg_per_s": NUM,
+          "sway_amplitude": NUM, "sway_direction": VEC3, "sway_frequency_hz": NUM,
+          "sway_wavelength": NUM, "sway_height": NUM, "sway_exponent": NUM, "sway_base": NUM}
 LIGHT = {"type": _choice({"directional", "point", "ambient"}), "direction": VEC3,
          "irradiance": _num_or_vec(3), "position": VEC3, "intensity": _num_or_vec(3),
          "radiance": _num_or_vec(3)}
@@ -170,6 +182,10 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
     materials, textures, by_name = _materials(path, data)
     parts = _meshes(path, data, materials, textures, by_name)
     directional, point, ambient = _lights(path, data)
+    if "fps" in data and not any("motion" in m for m in data["meshes"]):
+        raise SceneConfigError(path, "fps", "no mesh has a motion table; fps is the rate of "
+                               "the animation clock")
+    fps = _fps(path, data)
     eff = _effects(path, data)
     eff.update(effects or {})
     try:
@@ -177,7 +193,8 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
                            camera, name=data.get("name", path.stem),
                            description=data.get("description", ""),
                            shadows=data.get("shadows", False), effects=eff,
-                           texture_resolution=data.get("texture_resolution"))
+                           texture_resolution=data.get("texture_resolution"),
+                           fps=fps)
     except (ValueError, KeyError) as e:
         raise SceneConfigError(path, "<scene>", str(e)) from None
 
@@ -268,7 +285,9 @@ def _meshes(path: Path, data: dict, materials: list, textures: list, by_name: di
                 mat = 0
             got = [_primitive(path, pre, m)]
         xf = trs_matrix(m.get("translate", (0, 0, 0)), m.get("rotate_deg", (0, 0, 0)), m.get("scale", 1.0))
+        motion = _motion(path, f"{pre}.motion", m["motion"]) if "motion" in m else None
         for p in got:
+            p.motion = motion
             p = p.transformed(xf)
             if mat is not None:
                 p.material = mat
@@ -276,6 +295,38 @@ def _meshes(path: Path, data: dict, materials: list, textures: list, by_name: di
                 p.velocity = np.asarray(m["velocity"], np.float64)
             parts.append(p)
     return parts
+
+
+def _fps(path: Path, data: dict) -> float:
+    fps = float(data.get("fps", DEFAULT_FPS))
+    if not fps > 0.0:
+        raise SceneConfigError(path, "fps", f"must be > 0, got {data['fps']!r}")
+    return fps
+
+
+# A key that only matters with another one set (nothing accepted and ignored).
+MOTION_NEEDS = {"spin_axis": ("spin_deg_per_s",), "pivot": ("spin_deg_per_s", "orbit_deg_per_s"),
+                "orbit_center": ("orbit_deg_per_s",), "orbit_axis": ("orbit_deg_per_s",),
+                **{k: ("sway_amplitude",) for k in MOTION if k.startswith("sway_")
+                   and k != "sway_amplitude"}}
+
+
+def _motion(path: Path, pre: str, table) -> ObjectMotion:
+    _check_table(path, pre, table, MOTION)
+    for key, needs in MOTION_NEEDS.items():
+        if key in table and not any(table.get(n) for n in needs):
+            raise SceneConfigError(path, f"{pre}.{key}", f"has no effect unless "
+                                   f"{' or '.join(needs)} is set and non-zero")
+    try:
+        motion = ObjectMotion(**{k: tuple(v) if isinstance(v, list) else v
+                                 for k, v in table.items()})
+    except ValueError as e:
+        key = next((k for k in table if str(e).startswith(k)), None)
+        raise SceneConfigError(path, f"{pre}.{key}" if key else pre, str(e)) from None
+    if not (motion.rigid or motion.sways):
+        raise SceneConfigError(path, pre, "declares no motion; set spin_deg_per_s, velocity, "
+                               "orbit_deg_per_s or sway_amplitude")
+    return motion
 
 
 def _lights(path: Path, data: dict) -> tuple[list, list, np.ndarray]:

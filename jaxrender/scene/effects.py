@@ -29,7 +29,8 @@ class Effects:
     shadows:     look up the directional shadow map (needs ``scene.shadow``).
     alpha_test:  materials may be alpha-tested; pipelines call ``shading.alpha_test``.
     emissive:    add the emissive term.
-    motion:      the scene has per-vertex velocities (``scene.velocity``) for motion studies.
+    motion:      the scene is animated (``scene.animation``): pipelines pose it at each frame
+                 (``animation.pose``); off, no pose is computed. Follows the meshes' motion.
     procedural:  evaluate procedural shaders (the 1-texel stripe shader).
     brdfs:       sorted tuple of the BRDF kinds present; only these lobes are compiled.
     shader_cost: number of extra light layers evaluated (0 = the plain shader). Each layer

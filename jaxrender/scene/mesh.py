@@ -20,6 +20,7 @@ class MeshPart:
     tangents: np.ndarray | None = None
     material: int | np.ndarray = 0
     velocity: np.ndarray | None = None  # per-vertex world displacement per frame ([3] or [V,3])
+    motion: object = None  # an animation.ObjectMotion, or None for a part that does not move
     name: str = ""
     extras: dict = field(default_factory=dict)
 

@@ -72,6 +72,8 @@ def _reproject_one(depth, cam, prev_cam, prev_depth, width, height, tol):
     yy = jnp.broadcast_to(y[:, None], (height, width))
     x_ndc = 2.0 * xx / width - 1.0
     y_ndc = 1.0 - 2.0 * yy / height
+    if cam.jitter is not None:  # the pixel centre saw the point the projection shifted there
+        x_ndc, y_ndc = x_ndc - cam.jitter[0], y_ndc - cam.jitter[1]
 
     # Unproject frame t: view z from window depth, x and y from the pinhole.
     dist = linear_depth(depth, cam)  # = -z_view

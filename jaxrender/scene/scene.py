@@ -8,6 +8,7 @@ import dataclasses
 import jax.numpy as jnp
 import numpy as np
 
+from jaxrender.scene.animation import DEFAULT_FPS, Animation, build_animation
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.effects import BRDF_NAMES, LAMBERT, Effects
 from jaxrender.scene.lights import Lights
@@ -35,10 +36,12 @@ class ShadowMap:
 @pytree_dataclass
 class Scene:
     """positions float32[V,3] world; normals float32[V,3] (unit or 0); uvs float32[V,2];
-    tangents float32[V,4]; velocity float32[V,3] world displacement per frame (motion);
+    tangents float32[V,4]; velocity float32[V,3] declared world displacement per frame (VRS by speed);
     faces int32[T,3]; tri_material int32[T]; tri_object int32[T] (mesh/instance id);
     bounds float32[2,3] (min, max corner); materials; textures; lights; camera (the default
     camera); shadow (ShadowMap or None; filled by ``shading.with_shadow_map``);
+    animation (``scene.animation.Animation``, or None for a scene that does not move; the
+    arrays above are its rest pose, ``animation.pose(scene, t)`` the scene at frame t);
     effects (static); name, description (static)."""
 
     positions: Array
@@ -55,6 +58,7 @@ class Scene:
     lights: Lights
     camera: Camera
     shadow: ShadowMap | None = None
+    animation: Animation | None = None
     effects: Effects = static_field(default=Effects())
     name: str = static_field(default="scene")
     description: str = static_field(default="")
@@ -68,7 +72,7 @@ class Scene:
         return self.positions.shape[0]
 
 
-def derive_effects(materials: list[Material], parts_have_motion: bool, shadows: bool) -> Effects:
+def derive_effects(materials: list[Material], animated: bool, shadows: bool) -> Effects:
     """The default effects: exactly what the scene's materials and lights use."""
     return Effects(
         textures=any(m.texture >= 0 for m in materials),
@@ -77,7 +81,7 @@ def derive_effects(materials: list[Material], parts_have_motion: bool, shadows: 
         shadows=shadows,
         alpha_test=any(m.alpha_tested for m in materials),
         emissive=any(max(m.emissive) > 0 for m in materials),
-        motion=parts_have_motion,
+        motion=animated,
         procedural=any(m.procedural != "none" for m in materials),
         brdfs=tuple(sorted({BRDF_NAMES[m.brdf] for m in materials} | {LAMBERT})),
     )
@@ -86,10 +90,12 @@ def derive_effects(materials: list[Material], parts_have_motion: bool, shadows: 
 def build_scene(parts: list[MeshPart], materials: list[Material], textures: list[np.ndarray],
                 lights: Lights, camera: Camera, *, name: str, description: str = "",
                 shadows: bool = False, effects: dict | Effects | None = None,
-                texture_resolution: int | None = None) -> Scene:
-    """Flatten mesh parts (already in world space) into one Scene. Each part is one object id.
+                texture_resolution: int | None = None, fps: float = DEFAULT_FPS) -> Scene:
+    """Flatten mesh parts (already in world space) into one Scene. Each part is one object id;
+    a part's ``motion`` (an ``animation.ObjectMotion``) animates it, frames at ``fps``.
 
     effects: None for the derived default, a dict of overrides on top of it, or an Effects.
+    The ``motion`` flag follows the parts' motion (it cannot be set apart from it).
     """
     if not parts:
         raise ValueError(f"scene {name!r}: no meshes")
@@ -116,12 +122,19 @@ def build_scene(parts: list[MeshPart], materials: list[Material], textures: list
         raise ValueError(f"scene {name!r}: a face refers to a missing vertex")
     if len(faces) >= 2**31 - 1:
         raise ValueError(f"scene {name!r}: too many triangles for int32 ids")
+    vertex_object = np.concatenate([np.full(len(p.positions), i) for i, p in enumerate(parts)])
+    anim = build_animation([p.motion for p in parts], pos, cat("normals"), cat("tangents"),
+                           vertex_object, fps)
     used = materials  # all declared materials count for the default effects
-    default = derive_effects(used, bool(np.any(vel != 0)), shadows)
+    default = derive_effects(used, anim is not None, shadows)
     if isinstance(effects, Effects):
         eff = effects
     else:
         eff = default.replace(**(effects or {}))
+    if eff.motion != (anim is not None):
+        raise ValueError(f"scene {name!r}: effects.motion={eff.motion} but the scene "
+                         f"{'moves' if anim is not None else 'has no animation'}; the flag "
+                         f"follows the meshes' motion")
     f32 = lambda a: jnp.asarray(np.asarray(a, np.float32))  # noqa: E731
     i32 = lambda a: jnp.asarray(np.asarray(a, np.int32))  # noqa: E731
     lo = pos.min(0) if len(pos) else np.zeros(3)
@@ -132,7 +145,7 @@ def build_scene(parts: list[MeshPart], materials: list[Material], textures: list
         tri_material=i32(tri_mat), tri_object=i32(tri_obj), bounds=f32(np.stack([lo, hi])),
         materials=pack_materials(materials),
         textures=pack_textures(textures, resolution=texture_resolution),
-        lights=lights, camera=camera, shadow=None, effects=eff, name=name,
+        lights=lights, camera=camera, shadow=None, animation=anim, effects=eff, name=name,
         description=description,
     )
 

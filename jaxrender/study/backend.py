@@ -15,6 +15,7 @@ import numpy as np
 
 from jaxrender import metrics
 from jaxrender import scene as scenes
+from jaxrender.pipelines import motion_field as motion_fields
 from jaxrender.pipelines import registry
 from jaxrender.scene.builtin import BUILTINS
 from jaxrender.scene.camera_path import PATH_TYPES
@@ -137,17 +138,37 @@ def frame_metrics(test: np.ndarray, ref: np.ndarray, names) -> tuple[dict, np.nd
             np.asarray(err_map, np.float32).reshape(test.shape[:2]))
 
 
-def sequence_metrics(tests: np.ndarray, refs: np.ndarray, names) -> tuple[dict, list]:
+def sequence_metrics(tests: np.ndarray, refs: np.ndarray, names, motion=None
+                     ) -> tuple[dict, list]:
     """Metrics of a whole (T, H, W, 3) sequence (the value is repeated on each frame's row)
     and the per-frame temporal error of each frame against its predecessor (NaN at frame 0),
-    whose mean over frames 1.. is the sequence's value. Display-referred, as frame_metrics."""
+    whose mean over frames 1.. is the sequence's value. Display-referred, as frame_metrics.
+    ``motion``: the sequence's motion field (``motion_field``), for the metrics that warp."""
     t = tests.shape[0]
-    if "temporal_error" not in names:
-        return {}, [float("nan")] * t
+    names = [n for n in names if metrics.METRICS[n].sequence]
+    per_frame = [float("nan")] * t
+    if not names:
+        return {}, per_frame
     if t < 2:
-        return {"temporal_error": float("nan")}, [float("nan")]
-    fn = metrics.METRICS["temporal_error"].fn
+        return {n: float("nan") for n in names}, per_frame
     ti, ri = metrics.to_display(tests), metrics.to_display(refs)
-    per_frame = [float("nan")] + [_value(fn(ti[i - 1:i + 1], ri[i - 1:i + 1]))
-                                  for i in range(1, t)]
-    return {"temporal_error": _value(fn(ti, ri))}, per_frame
+    out = {}
+    for name in names:
+        m = metrics.METRICS[name]
+        if m.motion and motion is None:
+            raise ValueError(f"metric {name!r} needs the sequence's motion field")
+        out[name] = _value(m.fn(ti, ri, motion) if m.motion else m.fn(ti, ri))
+    if "temporal_error" in names:
+        fn = metrics.METRICS["temporal_error"].fn
+        per_frame = [float("nan")] + [_value(fn(ti[i - 1:i + 1], ri[i - 1:i + 1]))
+                                      for i in range(1, t)]
+    return out, per_frame
+
+
+def needs_motion(names) -> bool:
+    return any(metrics.METRICS[n].motion for n in names)
+
+
+def motion_field(scene, cameras, width: int, height: int, start: int):
+    """The motion field of a rendered path (``pipelines.motion_field``)."""
+    return motion_fields.motion_field(scene, cameras, width, height, start=start)

@@ -61,7 +61,9 @@ def camera_digest(camera) -> str:
     return h.hexdigest()
 
 
-def reference_key(scene_spec, camera, ref_spec, resolution) -> str:
+def reference_key(scene_spec, camera, ref_spec, resolution, frame: int | None = None) -> str:
+    """The cache key of a reference frame; ``frame``: its index on the animation clock, for a
+    scene that moves (a still scene's frame is its camera alone)."""
     parts = {
         "scene": [scene_spec.source, list(map(list, scene_spec.params)), scene_spec.file_hash],
         "camera": camera_digest(camera),
@@ -70,6 +72,8 @@ def reference_key(scene_spec, camera, ref_spec, resolution) -> str:
         "resolution": list(resolution),
         "code": code_version(),
     }
+    if frame is not None:
+        parts["frame"] = int(frame)
     blob = json.dumps(parts, sort_keys=True, default=repr).encode()
     return hashlib.sha256(blob).hexdigest()[:32]
 

@@ -115,7 +115,8 @@ def _compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
         for spec, path in pairs.values():
             ref_cams = cams[spec.label, path.name][warm:]
             if spec.label not in ref_programs and not references.all_cached(
-                    spec, ref_cams, ref, study.resolution):
+                    spec, ref_cams, ref, study.resolution, first_frame=warm,
+                    moving=getattr(scenes[spec.label], "animation", None) is not None):
                 ref_programs[spec.label] = comp.submit(
                     f"the reference of {spec.label}", spec, path, ref.pipeline, ref.params,
                     False, references.compile_reference, scenes[spec.label], ref_cams[0], ref,
@@ -124,7 +125,8 @@ def _compile_all(study: Study, todo, scenes: dict, cams: dict) -> dict:
         for spec, path in pairs.values():
             references.reference_frames(scenes[spec.label], spec,
                                         cams[spec.label, path.name][warm:], ref,
-                                        study.resolution, programs=ref_programs)
+                                        study.resolution, programs=ref_programs,
+                                        first_frame=warm)
         return {key: f.result() for key, f in futures.items()}
     finally:
         comp.close()

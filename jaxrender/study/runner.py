@@ -149,8 +149,11 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
             _save_frame_images(out_dir, spec, path, seq, t, row, img, err, ref, aux)
         if progress is not None:
             progress.update(1)
+    motion = (backend.motion_field(scene, cams, w, h, start=warm)
+              if backend.needs_motion(study.metrics) and len(cams) > 1 else None)
     seq_metrics, per_frame = backend.sequence_metrics(
-        images, np.stack([np.asarray(r["image"], np.float32) for r in refs]), study.metrics)
+        images, np.stack([np.asarray(r["image"], np.float32) for r in refs]), study.metrics,
+        motion)
     for r, te in zip(rows, per_frame):
         r.update(seq_metrics)
         r["temporal_error_frame"] = te
@@ -257,7 +260,8 @@ def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log)
                     continue
                 scene, seq_cams = scenes[spec.label], cams[spec.label, path.name]
                 refs = reference_frames(scene, spec, seq_cams[study.warmup_frames:],
-                                        study.reference, study.resolution)
+                                        study.reference, study.resolution,
+                                        first_frame=study.warmup_frames)
                 for v in variants:
                     bar.set_description(f"{spec.label}/{path.name}: {v.label}")
                     progs = (compiled[program_key(spec, v, len(seq_cams))],

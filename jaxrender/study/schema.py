@@ -19,7 +19,7 @@ from pathlib import Path
 
 from jaxrender import catalog
 from jaxrender.errors import StudyError, UserError
-from jaxrender.metrics import METRICS
+from jaxrender.metrics import DEFAULT_METRICS, METRICS
 from jaxrender.parsing import parse_resolution
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED, overridden_message
 from jaxrender.study import backend, shader_cost
@@ -333,7 +333,7 @@ def parse_study(data: dict, file: str, *, study_dir: Path, configs: Path | None 
     except FileNotFoundError as e:
         raise UserError(f"--configs: {e}") from None
     d = read_table(ck, data, "", Study, extra={"frames": 1},
-                   defaults={"name": Path(file).stem, "metrics": list(METRICS),
+                   defaults={"name": Path(file).stem, "metrics": list(DEFAULT_METRICS),
                              "figures": list(FIGURES), "save_frames": [0]})
     if not all(c.isalnum() or c in "-_." for c in d["name"]):
         ck.fail("name", f"use letters, digits, '-', '_' or '.', got {d['name']!r}")

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from jaxrender.errors import UserError
-from jaxrender.metrics import METRICS
+from jaxrender.metrics import DEFAULT_METRICS, METRICS
 from jaxrender.parsing import parse_resolution
 
 FIGURES = (
@@ -109,7 +109,7 @@ class Study:
     paths: tuple[PathSpec, ...] = None
     pipelines: tuple[PipelineSpec, ...] = _field((), required=True)
     reference: ReferenceSpec = _field(None, table=True)
-    metrics: tuple[str, ...] = tuple(METRICS)
+    metrics: tuple[str, ...] = DEFAULT_METRICS
     figures: tuple[str, ...] = FIGURES
     save_frames: tuple[int, ...] = (0,)
     timing: TimingSpec = _field(None, table=True)

@@ -32,7 +32,8 @@ from typing import Any, NamedTuple
 import numpy as np
 import pytest
 
-from jaxrender.pipelines import PipelineOverflow, get_pipeline, list_pipelines, make_config
+from jaxrender.pipelines import (PipelineOverflow, RenderConfig, get_pipeline, list_pipelines,
+                                 make_config)
 from jaxrender.pipelines import program
 from jaxrender.scene.camera_path import pan
 from jaxrender.shading import load_lit_scene
@@ -213,8 +214,15 @@ def _builtin_pipelines():
             if p.config_cls.__module__.startswith("jaxrender.pipelines.")}
 
 
+# The temporal anti-aliasing settings every config inherits from RenderConfig are one
+# implementation applied after any pipeline's resolve: their cases (each field changes the
+# output; refused without ``taa``) are in tests/pipelines/test_taa.py, once.
+TAA_FIELDS = {f.name for f in dataclasses.fields(RenderConfig) if f.name.startswith("taa")}
+
+
 def _fields(pipe) -> set[str]:
-    return {f.name for f in dataclasses.fields(pipe.config_cls)} - {"width", "height"}
+    return ({f.name for f in dataclasses.fields(pipe.config_cls)} - {"width", "height"}
+            - TAA_FIELDS)
 
 
 @functools.lru_cache(maxsize=None)

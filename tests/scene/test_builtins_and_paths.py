@@ -10,7 +10,8 @@ from jaxrender.scene import (Effects, default_camera, list_builtin_scenes, load_
 from jaxrender.scene.builtin import many_small
 from jaxrender.scene.camera_path import dolly, frame, jitter, orbit, pan
 
-NAMES = ["stripes", "spheres", "foliage", "thin", "terrain", "sliver", "room", "many_small"]
+NAMES = ["stripes", "spheres", "foliage", "thin", "terrain", "sliver", "room", "many_small",
+         "foliage_wind", "spheres_spin"]
 
 
 def test_every_builtin_loads():
