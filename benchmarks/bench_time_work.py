@@ -21,6 +21,8 @@ import jax
 import numpy as np
 
 from jaxrender.parsing import parse_spec, resolution_arg
+from jaxrender.study.shader_cost import shading_work
+from jaxrender.study.time_fit import fit_line
 from jaxrender.timing import device_description, time_call
 
 DEFAULT_PIPELINES = ("visibility", "forward", "forward:z_prepass=true", "deferred", "visbuffer",
@@ -63,20 +65,16 @@ def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repe
 
 
 def fit(rows):
-    """(intercept ms, slope ms per million work units, residual rms ms) per (scene, pipeline)."""
-    out = {}
+    """``study.time_fit.fit_line`` of every (scene, pipeline) with two or more shader costs."""
     groups = {}
     for r in rows:
         if "median_ms" in r and r["pipeline"] not in SINGLE_COST:
             groups.setdefault((r["scene"], r["pipeline"]), []).append(r)
+    out = {}
     for key, rs in groups.items():
-        x = np.array([r["shade_invocations"] * (1 + r["shader_cost"]) / 1e6 for r in rs])
-        y = np.array([r["median_ms"] for r in rs])
-        if len(rs) < 2 or np.ptp(x) == 0:
-            continue
-        slope, intercept = np.polyfit(x, y, 1)
-        resid = y - (intercept + slope * x)
-        out[key] = (float(intercept), float(slope), float(np.sqrt(np.mean(resid ** 2))))
+        work = [shading_work(r["shade_invocations"], r["shader_cost"]) for r in rs]
+        if len(set(work)) > 1:
+            out[key] = fit_line(work, [r["median_ms"] for r in rs])
     return out
 
 
@@ -111,8 +109,10 @@ def main(argv=None) -> int:
                 with open(a.out, "a") as f:
                     f.write(json.dumps(row) + "\n")
                 print(json.dumps(row), flush=True)
-    for (scene, spec), (b, m, rms) in fit(rows).items():
-        print(f"fit {a.label} {scene} {spec}: fixed {b:.3f} ms, slope {m:.4f} ms/M, rms {rms:.3f}")
+    for (scene, spec), f in fit(rows).items():
+        print(f"fit {a.label} {scene} {spec}: fixed {f.intercept_ms:.3f} +- {f.intercept_se:.3f} ms,"
+              f" slope {f.slope_ms:.4f} +- {f.slope_se:.4f} ms/M, R^2 {f.r2:.3f}"
+              + ("" if f.linear else f" (not linear: {f.note})"))
     return 0
 
 

@@ -15,22 +15,12 @@ from pathlib import Path
 from jaxrender import catalog
 from jaxrender.bench import add_arguments as bench_arguments  # argparse only: no jax yet
 from jaxrender.errors import StudyError, UserError
-from jaxrender.parsing import parse_settings, resolution_arg
+from jaxrender.parsing import parse_settings, positive_int_arg, resolution_arg
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, status 2
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
-
-
-def _positive(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return n
 
 
 # ------------------------------------------------------------------ commands
@@ -216,7 +206,7 @@ def _add_study(sub) -> None:
                    "study's name (e.g. quickstart; `jaxrender studies` lists them)")
     _configs_argument(s)
     s.add_argument("--out", help="output directory (default runs/NAME)")
-    s.add_argument("--frames", type=_positive, help="frames per camera path (overrides)")
+    s.add_argument("--frames", type=positive_int_arg, help="frames per camera path (overrides)")
     s.add_argument("--resolution", type=resolution_arg, help="WxH (overrides)")
     s.add_argument("--force", action="store_true", help="discard stored rows and recompute")
     s.add_argument("--no-figures", action="store_true", help="do not draw figures")
@@ -276,7 +266,7 @@ def _add_render(sub) -> None:
     s.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="a pipeline parameter (value in TOML syntax); repeatable")
     s.add_argument("--resolution", type=resolution_arg, help="WxH (default 320x180)")
-    s.add_argument("--repeats", type=_positive, default=3, help="timed repeats (median)")
+    s.add_argument("--repeats", type=positive_int_arg, default=3, help="timed repeats (median)")
     s.add_argument("-o", "--output", required=True, help="the PNG to write")
     s.add_argument("--json", action="store_true", help="print the counts as JSON")
     s.set_defaults(fn=cmd_render)
@@ -300,7 +290,7 @@ def _add_reference(sub) -> None:
                         description="Delete and re-render the reference frames a study uses.")
     r.add_argument("study", help="a study TOML file or a bundled study's name")
     _configs_argument(r)
-    r.add_argument("--frames", type=_positive)
+    r.add_argument("--frames", type=positive_int_arg)
     r.add_argument("--resolution", type=resolution_arg)
     r.set_defaults(fn=cmd_reference)
     r = rsub.add_parser("clear", help="delete every cached reference",

@@ -39,6 +39,17 @@ def resolution_arg(text: str) -> tuple[int, int]:
         raise argparse.ArgumentTypeError(str(e).removeprefix(": ")) from None
 
 
+def positive_int_arg(text: str) -> int:
+    """An integer >= 1 as an argparse ``type=``: argparse names the flag itself."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return n
+
+
 def parse_value(text: str):
     """A TOML value (``4``, ``0.5``, ``true``, ``[1, 2]``, ``"s"``); a bare word is a string."""
     try:

@@ -17,15 +17,9 @@ from __future__ import annotations
 
 import argparse
 
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import positive_int_arg, resolution_arg
 
 SECTIONS = ("raster", "pipelines", "metrics")
-
-
-def _workers(text: str) -> int:
-    if not text.isdigit() or int(text) < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return int(text)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -45,7 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="pipelines: seconds of timed repeats per row at most; a slow row "
                         "takes fewer repeats, at least one (0: all --repeats). Every row runs: "
                         "the budget never skips a scene or a pipeline")
-    p.add_argument("--compile-workers", type=_workers, default=None, metavar="N",
+    p.add_argument("--compile-workers", type=positive_int_arg, default=None, metavar="N",
                    help="pipelines: programs of a scene compiled side by side before any is "
                         "timed (default: min(8, cores); 1: one after another, compile_s "
                         "then is a lone compile's)")

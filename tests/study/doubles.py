@@ -162,3 +162,23 @@ def install(monkeypatch, *, metrics: bool = True):
         for name, fn in _np_metrics().items():
             m = jaxrender.metrics.METRICS[name]
             monkeypatch.setitem(jaxrender.metrics.METRICS, name, dataclasses.replace(m, fn=fn))
+
+
+# The smallest study file over the doubles, for schema tests to extend.
+MINIMAL_STUDY = """
+name = "t"
+resolution = "24x16"
+scenes = ["tiny"]
+[[pipelines]]
+type = "flat"
+"""
+
+
+def write_study(root, text, name="s.toml"):
+    """``text`` (dedented) as ``root/studies/name``; returns its path."""
+    import textwrap
+
+    p = root / "studies" / name
+    p.parent.mkdir(exist_ok=True)
+    p.write_text(textwrap.dedent(text))
+    return p

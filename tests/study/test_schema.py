@@ -10,20 +10,8 @@ from jaxrender.parsing import parse_resolution
 from jaxrender.study.schema import load_study
 from jaxrender.study.specs import to_toml
 
-BASE = """
-name = "t"
-resolution = "24x16"
-scenes = ["tiny"]
-[[pipelines]]
-type = "flat"
-"""
-
-
-def _write(root, text, name="s.toml"):
-    p = root / "studies" / name
-    p.parent.mkdir(exist_ok=True)
-    p.write_text(textwrap.dedent(text))
-    return p
+from tests.study.doubles import MINIMAL_STUDY as BASE
+from tests.study.doubles import write_study as _write
 
 
 def test_minimal_defaults(fake):

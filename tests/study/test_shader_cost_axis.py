@@ -1,28 +1,14 @@
 """shader_cost in a study file: every pipeline entry takes it in params or sweep, it reaches
 the variants (and not the pipeline's config), and its mistakes name the file and the key."""
 
-import textwrap
-
 import pytest
 
 from jaxrender.errors import StudyError, UserError
 from jaxrender.study import backend, shader_cost
 from jaxrender.study.schema import load_study
 
-BASE = """
-name = "t"
-resolution = "24x16"
-scenes = ["tiny"]
-[[pipelines]]
-type = "flat"
-"""
-
-
-def _write(root, text):
-    p = root / "studies" / "s.toml"
-    p.parent.mkdir(exist_ok=True)
-    p.write_text(textwrap.dedent(text))
-    return p
+from tests.study.doubles import MINIMAL_STUDY as BASE
+from tests.study.doubles import write_study as _write
 
 
 def test_sweep_reaches_the_variants(fake):
