@@ -9,7 +9,8 @@ from jaxrender.figures import draw_run_figures
 from jaxrender.pipelines.registry import Pipeline, get_pipeline, make_config
 from jaxrender.scene import Scene
 from jaxrender.shading import load_lit_scene
-from jaxrender.study import RunResult, load_study
+from jaxrender.study import RunResult, load_study, shader_cost
+from jaxrender.study.backend import with_shader_cost
 from jaxrender.study import run_study as run_loaded_study
 from jaxrender.types import Frame
 
@@ -20,16 +21,20 @@ def load_scene(name_or_path: str | Path, **size_params) -> Scene:
     return load_lit_scene(name_or_path, **size_params)
 
 
-def _config(pipeline: str | Pipeline, params: dict):
+def _prepare(scene, pipeline: str | Pipeline, params: dict):
+    """(scene, pipeline, config) as a study entry with these params renders them:
+    ``shader_cost`` sets the scene's, the rest build the pipeline's config."""
+    params, cost = shader_cost.split(params)
     pipe = get_pipeline(pipeline) if isinstance(pipeline, str) else pipeline
-    return pipe, make_config(pipe, **params)
+    return with_shader_cost(scene, cost), pipe, make_config(pipe, **params)
 
 
 def render(scene: Scene, camera, pipeline: str | Pipeline = "deferred", **params) -> Frame:
     """One frame of ``pipeline`` (a registered name, ``jaxrender.list_pipelines()``), its
     config built from ``params``: ``width``, ``height`` and the pipeline's own keys (an
-    unknown key raises, naming it). A Frame: ``image`` (H, W, 3) linear RGB, ``counts``."""
-    pipe, cfg = _config(pipeline, params)
+    unknown key raises, naming it), and ``shader_cost`` as in a study's pipeline entry (the
+    scene's extra light layers). A Frame: ``image`` (H, W, 3) linear RGB, ``counts``."""
+    scene, pipe, cfg = _prepare(scene, pipeline, params)
     return pipe.render(scene, camera, cfg)
 
 
@@ -39,7 +44,7 @@ def render_sequence(scene: Scene, cameras, pipeline: str | Pipeline = "deferred"
     a leading axis), the pipeline's state carried from frame to frame (checkerboard's history,
     object space's store) in one compiled program; the first ``warmup_frames`` are rendered
     and dropped. A Frame with ``image`` (T, H, W, 3) and per-frame ``counts``."""
-    pipe, cfg = _config(pipeline, params)
+    scene, pipe, cfg = _prepare(scene, pipeline, params)
     return pipe.render_sequence(scene, cameras, cfg, warmup_frames=warmup_frames)
 
 
