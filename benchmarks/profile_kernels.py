@@ -71,8 +71,10 @@ def hlo_sources(fn, *args) -> dict[str, str]:
     return out
 
 
-def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "") -> dict:
-    """Trace ``calls`` steady-state calls of ``fn(*args)`` and print the kernel table."""
+def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
+                 scopes: tuple[str, ...] = ()) -> dict:
+    """Trace ``calls`` steady-state calls of ``fn(*args)`` and print the kernel table; with
+    ``scopes``, also the kernel time whose source lies under each named scope."""
     fn = jax.jit(fn)
     jax.block_until_ready(fn(*args))  # compile and warm up outside the trace
     jax.block_until_ready(fn(*args))
@@ -101,6 +103,10 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "") -> d
     except Exception as e:  # noqa: BLE001 - the table is still useful without sources
         sources = {}
         print(f"(no HLO sources: {type(e).__name__}: {e})")
+    for scope in scopes:  # kernels fused across scopes count where XLA named them
+        ms = sum(us for n, us in total.items()
+                 if f"{scope}/" in sources.get(n.replace(".", "_"), "")) / calls / 1e3
+        print(f"scope {scope}: kernels {ms:.3f} ms/call")
     print("| kernel | ms/call | launches/call | from |\n|---|---:|---:|---|")
     for name, us in sorted(total.items(), key=lambda kv: -kv[1])[:top]:
         print(f"| {name[:48]} | {us / calls / 1e3:.3f} | {count[name] / calls:.0f} | "
@@ -140,6 +146,11 @@ def main(argv=None) -> int:
     ap.add_argument("--traversal", default="auto", help="for 'raster': auto, bbox, recompute, spans")
     ap.add_argument("--calls", type=int, default=5)
     ap.add_argument("--top", type=int, default=15)
+    ap.add_argument("--frames", type=int, default=0,
+                    help="profile a still camera's sequence of this many frames (state carried: "
+                         "TAA's resolve runs); 0: one frame")
+    ap.add_argument("--scope", action="append", default=[],
+                    help="sum the kernel time under this named scope (e.g. taa)")
     args = ap.parse_args(argv)
     w, h = args.resolution
     print(f"device: {device_description()}, jax {jax.__version__}")
@@ -164,6 +175,15 @@ def main(argv=None) -> int:
     overrides = parse_settings(args.set, "--set")
     cfg = make_config(args.what, width=w, height=h, **overrides)
     label = f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}"
+    scopes = tuple(args.scope)
+    if args.frames:
+        from jaxrender.scene.camera_path import stack
+
+        path = stack([cam] * args.frames)
+        profile_call(lambda s, c: pipe.render_sequence(s, c, cfg).image, sc, path,
+                     calls=args.calls, top=args.top, scopes=scopes,
+                     label=f"{label} sequence of {args.frames} frames")
+        return 0
     if pipe.prepares:  # object_space: charts built on the host, outside
         import jax.numpy as jnp
 
@@ -173,10 +193,11 @@ def main(argv=None) -> int:
             frame, _ = pipe.step(s, st, pipe.init(s, st, c, cfg), c, jnp.int32(0), cfg)
             return frame
 
-        profile_call(one_frame, sc, cam, static, calls=args.calls, top=args.top, label=label)
+        profile_call(one_frame, sc, cam, static, calls=args.calls, top=args.top, label=label,
+                     scopes=scopes)
         return 0
     profile_call(lambda s, c: pipe.render(s, c, cfg), sc, cam, calls=args.calls, top=args.top,
-                 label=label)
+                 label=label, scopes=scopes)
     return 0
 
 

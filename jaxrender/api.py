@@ -51,15 +51,16 @@ def render_sequence(scene: Scene, cameras, pipeline: str | Pipeline = "deferred"
 def run_study(study: str | Path, *, out: str | Path | None = None, frames: int | None = None,
               resolution: str | tuple | None = None, configs: str | Path | None = None,
               force: bool = False, figures: bool = True, progress: bool = True,
-              log=print) -> RunResult:
+              log=print, devices: int | None = None) -> RunResult:
     """Run a study file (or a bundled study by name, ``jaxrender studies``) as ``jaxrender
     study`` does: results in ``out`` (default ``runs/NAME``), resuming what is stored unless
-    ``force``; ``frames`` and ``resolution`` override the file's. Returns the RunResult
+    ``force``; ``frames`` and ``resolution`` override the file's; ``devices``: how many local
+    devices the sequences spread over (default: all). Returns the RunResult
     (``rows``, ``summary``, ``out_dir``) after drawing its figures."""
     spec = load_study(study, configs=Path(configs) if configs else None)
     spec = spec.with_overrides(frames=frames, resolution=resolution)
     result = run_loaded_study(spec, Path(out) if out else Path("runs") / spec.name,
-                              force=force, progress=progress, log=log)
+                              force=force, progress=progress, log=log, devices=devices)
     if figures:
         draw_run_figures(result, log=log)
     return result

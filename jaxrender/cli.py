@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import tomllib
 from pathlib import Path
@@ -28,18 +29,46 @@ class _Parser(argparse.ArgumentParser):
 
 def cmd_study(a) -> int:
     from jaxrender.figures import draw_run_figures
+    from jaxrender.seeds.report import tables_for_study
     from jaxrender.study import load_study, run_study
 
     study = load_study(a.file, configs=a.configs).with_overrides(frames=a.frames,
                                                                  resolution=a.resolution)
+    given = [f for f in ("coordinator", "num_processes", "process_id")
+             if getattr(a, f) is not None]
+    if given and not a.distributed:
+        raise UserError(f"--{given[0].replace('_', '-')} needs --distributed")
+    if a.distributed:
+        from jaxrender.study.devices import initialize_distributed
+
+        initialize_distributed(a.coordinator, a.num_processes, a.process_id)
     out = Path(a.out) if a.out else Path("runs") / study.name
     print(f"study {study.name}: {len(study.scenes)} scene(s), {len(study.paths)} camera "
           f"path(s), {len(study.variants)} pipeline variant(s) at {study.resolution[0]}x"
           f"{study.resolution[1]} -> {out}")
-    result = run_study(study, out, force=a.force, progress=not a.no_progress)
+    result = run_study(study, out, force=a.force, progress=not a.no_progress,
+                       devices=a.devices)
+    import jax
+
+    if jax.process_index() != 0:  # a distributed run's other processes: the first exports
+        return 0
+    tables_for_study(study.name, result.rows, out)  # a source's table, if it measures one
     if not a.no_figures:
         draw_run_figures(result)
     print(f"results: {out / 'results.csv'}")
+    return 0
+
+
+def cmd_report(a) -> int:
+    from jaxrender.seeds import report
+
+    out = a.out or a.runs
+    claims = report.collect(a.runs, read_only=a.read, resolution=a.resolution,
+                            frames=a.frames, force=a.force, progress=not a.no_progress,
+                            tables_to=out)
+    md, csv_path = report.write_report(claims, out)
+    print(report.format_markdown(claims))
+    print(f"report: {md}, {csv_path}")
     return 0
 
 
@@ -51,6 +80,8 @@ def cmd_validate(a) -> int:
     frames = per_variant * len(s.variants)
     warm = s.warmup_frames * len(s.paths) * len(s.scenes) * len(s.variants)
     extra = f", plus {warm} warm-up frames" if warm else ""
+    matches = sum(len(p.match) for p in s.pipelines) * len(s.paths) * len(s.scenes)
+    extra += f", and {matches} matched point(s) to bisect" if matches else ""
     print(f"{a.file}: ok ({len(s.scenes)} scene(s), {len(s.paths)} path(s), "
           f"{len(s.variants)} variant(s), {frames} frames to render{extra})")
     return 0
@@ -211,7 +242,38 @@ def _add_study(sub) -> None:
     s.add_argument("--force", action="store_true", help="discard stored rows and recompute")
     s.add_argument("--no-figures", action="store_true", help="do not draw figures")
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
+    s.add_argument("--devices", type=positive_int_arg, help=(
+        "spread the sequences over this many local devices (default: all; each scene and "
+        "variant runs on one, and a device's sequences are timed while the others run)"))
+    s.add_argument("--distributed", action="store_true", help=(
+        "one process per host: jax.distributed.initialize() from the cluster's environment "
+        "(or --coordinator, --num-processes, --process-id); the processes share --out and "
+        "split the study, the first exports the merged results"))
+    s.add_argument("--coordinator", help="with --distributed: the coordinator's host:port")
+    s.add_argument("--num-processes", type=positive_int_arg, help="with --distributed")
+    s.add_argument("--process-id", type=int, help="with --distributed: this process's index")
     s.set_defaults(fn=cmd_study)
+
+    s = sub.add_parser("report", help="every source's published numbers beside ours",
+                       description=(
+        "Run the study of every source jaxrender reproduces (DACS: dacs_vs_checkerboard) into "
+        "RUNS/<study> (resuming what is stored there), or with --read read those runs, and "
+        "print and write report.md and report.csv: source, figure or slide, quantity, the "
+        "published value, ours, our conditions and the verdict (reproduced within the stated "
+        "tolerance, direction reproduced, not reproduced, not measured) with the reason. "
+        "--resolution and --frames run it small (on a CPU); the published numbers were "
+        "measured at full size."))
+    s.add_argument("--runs", type=Path, default=Path("runs") / "seeds",
+                   help="folder of the sources' study runs (default runs/seeds)")
+    s.add_argument("--out", type=Path, help="where report.md, report.csv and each source's own "
+                   "table (dacs_table.md) go (default RUNS)")
+    s.add_argument("--read", action="store_true",
+                   help="read the runs in RUNS, render nothing")
+    s.add_argument("--frames", type=positive_int_arg, help="frames per camera path (overrides)")
+    s.add_argument("--resolution", type=resolution_arg, help="WxH (overrides)")
+    s.add_argument("--force", action="store_true", help="discard stored rows and recompute")
+    s.add_argument("--no-progress", action="store_true", help="no progress bar")
+    s.set_defaults(fn=cmd_report)
 
 
 def _configs_argument(s) -> None:
@@ -302,6 +364,11 @@ def _add_reference(sub) -> None:
 
 
 def main(argv=None) -> int:
+    # A study compiles many programs at once, and on a GPU each compile autotunes in device
+    # memory; with JAX's default preallocation (75% of it held from the first array) the
+    # bundled time_follows_work study ran out of memory while compiling on an H200. Read when
+    # the backend starts, so this holds unless the user set it.
+    os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
     args = build_parser().parse_args(argv)
     try:
         return args.fn(args)

@@ -26,6 +26,7 @@ LAYERS = {
     "metrics": 5,
     "timing": 5.5,  # times compiled pipeline programs
     "study": 6,
+    "seeds": 6.5,  # the sources' published numbers beside study rows
     "figures": 7, "bench": 7,
     "cli": 8,
     "api": 9, "__init__": 9, "__main__": 9,

@@ -74,6 +74,17 @@ def test_study_figures_and_resume(fake, tmp_path, capsys):
     assert (out / "results.csv").read_text().count("\n") == 1 + 2 * 3
 
 
+@pytest.mark.parametrize("argv, message", [
+    (["--coordinator", "h:1"], "--coordinator needs --distributed"),
+    (["--process-id", "1"], "--process-id needs --distributed"),
+    (["--devices", "64"], "--devices 64: this process has 1 local device"),
+])
+def test_study_device_flags_are_checked(fake, tmp_path, capsys, argv, message):
+    out = tmp_path / "out"
+    assert main(["study", str(fake), "--out", str(out), "--no-progress", *argv]) == 2
+    assert message in capsys.readouterr().err
+
+
 def test_validate(fake, capsys):
     assert main(["validate", str(fake)]) == 0
     assert "ok (1 scene(s), 1 path(s), 2 variant(s), 4 frames" in capsys.readouterr().out

@@ -160,5 +160,6 @@ def test_builtin_presets_then_a_local_override(installed, tmp_path):
     assert (f"# preset 'pan_slow': {(tmp_path / 'configs').resolve()} ({local.resolve()}, "
             "overrides the built-in)") in resolved, resolved
     assert "pixels_per_frame = 2.0" in resolved, resolved
-    # The same programs as the first run (cameras are arguments, not constants): all loaded.
-    assert re.search(r"executable store: \d+ loaded, 0 compiled", log), log
+    # The same programs as the first run (cameras are arguments, not constants): all loaded,
+    # from the executable store where it is on, else from JAX's cache (the CPU default).
+    assert re.search(r"(executable store|compilation cache): \d+ loaded, 0 compiled", log), log

@@ -8,6 +8,7 @@ from jaxrender.figures.plots import (  # noqa: F401
     fig_object_space_marking,
     fig_pareto,
     fig_summary_table,
+    fig_tads_samples,
     fig_temporal,
     fig_time_work,
     fig_visbuffer_waves,

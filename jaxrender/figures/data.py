@@ -23,6 +23,7 @@ DACS_LEVEL_KEYS = ("level", "dacs_level", "decision_level")
 DACS_SHADED_KEYS = ("shaded", "shaded_mask", "decision")
 OS_CHUNK_KEYS = ("chunk_state", "chunk_marking", "marking")
 OS_MIP_KEYS = ("mip_level", "mip", "lod")
+TADS_KEYS = ("sample_class", "duplicates")
 
 
 @dataclass(frozen=True)
@@ -210,8 +211,8 @@ def _first(arrays: dict, keys):
 
 def aux_tables(run: Run, kind: str, max_entries: int = 6) -> list[tuple[str, dict]]:
     """Per (scene, camera path), the first saved frame of every sequence whose Frame.aux holds
-    the maps of ``kind``: "dacs" (a decision level and/or a shaded mask) or "object_space"
-    (chunk marking, optionally MIP levels)."""
+    the maps of ``kind``: "dacs" (a decision level and/or a shaded mask), "object_space"
+    (chunk marking, optionally MIP levels) or "tads" (sample classes and duplicates)."""
     groups: dict = {}
     for m, p in run.images:
         if m.get("pipeline") == "reference":
@@ -229,13 +230,18 @@ def aux_tables(run: Run, kind: str, max_entries: int = 6) -> list[tuple[str, dic
                 e["level"], e["shaded"] = _first(a, DACS_LEVEL_KEYS), _first(a, DACS_SHADED_KEYS)
                 if e["level"] is None and e["shaded"] is None:
                     continue
+            elif kind == "tads":
+                e["sample_class"], e["duplicates"] = (_first(a, (k,)) for k in TADS_KEYS)
+                if e["sample_class"] is None:
+                    continue
             else:
                 e["chunk_state"], e["mip_level"] = _first(a, OS_CHUNK_KEYS), _first(a, OS_MIP_KEYS)
                 if e["chunk_state"] is None:
                     continue
             entries.append(e)
         if entries:
-            what = "shading decisions" if kind == "dacs" else "object-space chunk marking"
+            what = {"dacs": "shading decisions", "tads": "TADS unique samples"}.get(
+                kind, "object-space chunk marking")
             out.append((f"{scene}__{path}", {"title": f"{scene} / {path}: {what}",
                                              "device": run.device,
                                              "entries": entries[:max_entries]}))
@@ -289,7 +295,9 @@ def time_work_tables(run: Run) -> list[tuple[str, dict]]:
                             "time": list(s.time_ms), "line_work": list(line_x / 1e6),
                             "line_time": list(s.fit.predict(line_x)), "linear": s.fit.linear})
             c = s.crossover
-            if c is not None and c.cost is not None and c.cost > 0:
+            # A crossover beyond the sweep is an extrapolation (time_fits.csv says so); drawn,
+            # it would stretch the axes over costs nobody measured.
+            if c is not None and c.cost is not None and 0 < c.cost <= max(s.costs):
                 w = s.invocations * (1 + c.cost)
                 crossings.append({"label": label, "cost": c.cost, "work": w / 1e6,
                                   "time": float(s.fit.predict(w))})

@@ -33,6 +33,9 @@ def _figure_jobs(run: data.Run, name: str) -> list[tuple[str, Callable[[], Figur
     if name == "object_space_marking":
         return [(f"object_space_marking__{s}", partial(plots.fig_object_space_marking, t))
                 for s, t in data.aux_tables(run, "object_space")]
+    if name == "tads_samples":
+        return [(f"tads_samples__{s}", partial(plots.fig_tads_samples, t))
+                for s, t in data.aux_tables(run, "tads")]
     if name == "visbuffer_waves":
         return [(f"visbuffer_waves__{s}", partial(plots.fig_visbuffer_waves, t))
                 for s, t in data.waves_tables(run)]

@@ -21,6 +21,12 @@ def _footer(fig: Figure, device: str) -> None:
         fig.text(0.995, 0.002, device, ha="right", va="bottom", fontsize=5, color="0.4")
 
 
+def _row_label(label: str) -> str:
+    """A variant's row label with its parameters on a second line: rows of small images are
+    shorter than "tads_every2 shade_every=2", and one-line labels ran into their neighbours."""
+    return label.replace(" ", "\n", 1)
+
+
 def _off(ax) -> None:
     ax.set_xticks([])
     ax.set_yticks([])
@@ -51,7 +57,6 @@ def fig_image_grid(panel: dict) -> Figure:
             a_img.imshow(img)
             a_img.add_patch(Rectangle((x0 - 0.5, y0 - 0.5), cw, ch, fill=False, ec="#ff00ff",
                                       lw=0.8))
-            a_img.set_ylabel(label, fontsize=7)
             if caption:
                 a_img.set_title(caption, fontsize=6, loc="left")
             if err is not None:
@@ -59,7 +64,7 @@ def fig_image_grid(panel: dict) -> Figure:
             a_crop.imshow(img[y0:y0 + ch, x0:x0 + cw])
             for a in (a_img, a_err, a_crop):
                 _off(a)
-            a_img.set_ylabel(label, fontsize=7)
+            a_img.set_ylabel(_row_label(label), fontsize=7)
         axes[0][0].set_title("image", fontsize=7)
         axes[0][1].set_title("error map", fontsize=7)
         axes[0][2].set_title("hardest region (zoom)", fontsize=7)
@@ -131,7 +136,6 @@ def fig_dacs_decisions(table: dict) -> Figure:
         axes = fig.subplots(len(entries), 3, squeeze=False)
         for row, e in zip(axes, entries):
             row[0].imshow(e["image"])
-            row[0].set_ylabel(e["label"], fontsize=7)
             if e.get("level") is not None:
                 m = np.asarray(e["level"])
                 n = int(np.clip(m.max() + 1, 2, len(_LEVEL_COLOURS)))
@@ -143,7 +147,7 @@ def fig_dacs_decisions(table: dict) -> Figure:
                 row[2].set_title(f"shaded: {float(np.mean(m)):.1%}", fontsize=7)
             for ax in row:
                 _off(ax)
-            row[0].set_ylabel(e["label"], fontsize=7)
+            row[0].set_ylabel(_row_label(e["label"]), fontsize=7)
         fig.suptitle(table["title"])
         _footer(fig, table.get("device", ""))
     return fig
@@ -170,7 +174,49 @@ def fig_object_space_marking(table: dict) -> Figure:
                 row[2].set_title("MIP level", fontsize=7)
             for ax in row:
                 _off(ax)
-            row[0].set_ylabel(e["label"], fontsize=7)
+            row[0].set_ylabel(_row_label(e["label"]), fontsize=7)
+        fig.suptitle(table["title"])
+        _footer(fig, table.get("device", ""))
+    return fig
+
+
+def fig_tads_samples(table: dict) -> Figure:
+    """Texture-aligned deferred shading's unique samples: per variant the image, how many
+    texels each pixel shades after the north / north-west / west rule (its sample class: 0,
+    1, 2, 3, 4 or more with anisotropic taps) and how many of them some other pixel shades
+    too (the duplicates the rule misses).
+
+    table: {title, device, entries: [{label, image, sample_class: (H,W) int, -1 uncovered,
+            duplicates: (H,W) int or None}]}"""
+    entries = table["entries"]
+    h, w = entries[0]["image"].shape[:2]
+    colours = ["#000000", "#404040", "#1f77b4", "#2ca02c", "#ff7f0e", "#d62728"]
+    names = ["none", "0", "1", "2", "3", "4+"]
+    with style():
+        fig = new_figure(3 * 2.0, len(entries) * 2.0 * h / max(w, 1) + 0.8)
+        axes = fig.subplots(len(entries), 3, squeeze=False)
+        for row, e in zip(axes, entries):
+            row[0].imshow(e["image"])
+            m = np.clip(np.asarray(e["sample_class"], np.int32), -1, 4)
+            row[1].imshow(m + 1, cmap=ListedColormap(colours), vmin=0, vmax=5,
+                          interpolation="nearest")
+            cov = m[m >= 0]
+            share = [float(np.mean(cov == k)) if cov.size else 0.0 for k in range(5)]
+            row[1].set_title("texels shaded 0/1/2/3/4+: " + " ".join(f"{v:.0%}" for v in share),
+                             fontsize=5)
+            if e.get("duplicates") is not None:
+                d = np.asarray(e["duplicates"], np.float32)
+                row[2].imshow(d, cmap="magma", vmin=0, vmax=max(float(d.max()), 1.0),
+                              interpolation="nearest")
+                row[2].set_title(f"texels also shaded by another pixel: {int(np.sum(d))}",
+                                 fontsize=5)
+            for ax in row:
+                _off(ax)
+            row[0].set_ylabel(_row_label(e["label"]), fontsize=7)
+        fig.legend([Rectangle((0, 0), 1, 1, color=c) for c in colours], names,
+                   loc="outside lower center", ncol=len(names), fontsize=6,
+                   title="sample class (texels a pixel shades)", title_fontsize=6,
+                   frameon=False)
         fig.suptitle(table["title"])
         _footer(fig, table.get("device", ""))
     return fig
@@ -216,6 +262,8 @@ def fig_summary_table(table: dict) -> Figure:
                      colLabels=table["columns"], loc="center", cellLoc="right")
         t.auto_set_font_size(False)
         t.set_fontsize(7)
+        # Columns as wide as their text: at equal widths long variant labels were cut off.
+        t.auto_set_column_width(list(range(len(table["columns"]))))
         t.scale(1.0, 1.2)
         ax.set_title(table["title"])
         _footer(fig, table.get("device", ""))

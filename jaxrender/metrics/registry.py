@@ -47,6 +47,12 @@ def _warp_error(test, reference, motion, **kw):
     return warp_error(test, reference, motion, **kw).relative
 
 
+def _warp_error_test(test, reference, motion, **kw):
+    """The test sequence's own warping error, not divided by the reference's: finite on a
+    still scene, where the reference does not change and the ratio is +inf for any flicker."""
+    return warp_error(test, reference, motion, **kw).test
+
+
 METRICS: dict[str, Metric] = {m.name: m for m in (
     Metric("rmse", rmse),
     Metric("psnr", psnr),
@@ -55,6 +61,7 @@ METRICS: dict[str, Metric] = {m.name: m for m in (
     Metric("delta_e", delta_e2000),
     Metric("temporal_error", temporal_error, sequence=True),
     Metric("warp_error", _warp_error, sequence=True, motion=True, default=False),
+    Metric("warp_error_test", _warp_error_test, sequence=True, motion=True, default=False),
     Metric("mean_flip", _mean_flip, sequence=True, default=False),
 )}
 DEFAULT_METRICS = tuple(n for n, m in METRICS.items() if m.default)

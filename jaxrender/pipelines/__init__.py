@@ -23,3 +23,4 @@ from jaxrender.pipelines import visbuffer  # noqa: E402,F401
 from jaxrender.pipelines import dacs  # noqa: E402,F401
 from jaxrender.pipelines import checkerboard  # noqa: E402,F401
 from jaxrender.pipelines import object_space  # noqa: E402,F401
+from jaxrender.pipelines import tads  # noqa: E402,F401

@@ -60,6 +60,52 @@ class PipelineConfig(RenderConfig):
                 f"not fit their bit fields; raise fragment_capacity (see the Frame counts)")
 
 
+TRANSPARENT_OVERFLOWS = ("chunks", "error")
+OIT_MODES = ("sorted", "weighted")
+
+
+@dataclass(frozen=True)
+class BlendingConfig(PipelineConfig):
+    """The settings of the transparent pass (``pipelines.transparency``), for the pipelines that
+    run it; refused on a scene without the transparency effect.
+
+    oit: "sorted" (exact: every pixel's layers sorted back to front) or "weighted" (weighted
+        blended order-independent transparency, McGuire and Bavoil 2013: no sort, no cap).
+    transparent_layers: the static cap of layers per pixel composited per pass (a k-buffer of
+        that depth); a pixel with more runs further passes ("chunks") or the frame is refused
+        naming the cap ("error"). Sorted only.
+    transparent_overflow: "chunks" or "error", as above.
+    """
+
+    oit: str = "sorted"
+    transparent_layers: int = 8
+    transparent_overflow: str = "chunks"
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.oit not in OIT_MODES:
+            raise ValueError(f"oit must be one of {', '.join(OIT_MODES)}, got {self.oit!r}")
+        if int(self.transparent_layers) < 1:
+            raise ValueError(f"transparent_layers must be >= 1, got {self.transparent_layers}")
+        if self.transparent_overflow not in TRANSPARENT_OVERFLOWS:
+            raise ValueError(f"transparent_overflow must be one of "
+                             f"{', '.join(TRANSPARENT_OVERFLOWS)}, got "
+                             f"{self.transparent_overflow!r}")
+        if self.oit == "weighted":
+            for f in ("transparent_layers", "transparent_overflow"):
+                if getattr(self, f) != BLENDING_DEFAULTS[f]:
+                    raise ValueError(f"{f} has no effect with oit = \"weighted\" (no sort, no "
+                                     f"layer cap); leave it or set oit = \"sorted\"")
+
+    def overflow_hint(self) -> str:
+        return (super().overflow_hint() + f"; or a pixel with more transparent layers than "
+                f"transparent_layers={self.transparent_layers} under transparent_overflow = "
+                f"\"error\" (raise the cap or use \"chunks\")")
+
+
+BLENDING_DEFAULTS = {"oit": "sorted", "transparent_layers": 8, "transparent_overflow": "chunks"}
+
+
 def make_counts(**values) -> dict:
     """The standard counts dict: every key of COUNT_KEYS (0 when not given) plus extras.
     ``overshading`` defaults to shade_invocations / covered_pixels."""
@@ -82,5 +128,6 @@ def poison_on_overflow(image: Array, overflow: Array) -> Array:
     return jnp.where(overflow > 0, jnp.float32(jnp.nan), image)
 
 
-__all__ = ["COUNT_KEYS", "FLOAT_COUNTS", "INT_COUNTS", "PipelineConfig", "make_counts",
+__all__ = ["BLENDING_DEFAULTS", "BlendingConfig", "COUNT_KEYS", "FLOAT_COUNTS", "INT_COUNTS",
+           "PipelineConfig", "make_counts",
            "poison_on_overflow"]

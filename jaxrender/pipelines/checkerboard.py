@@ -35,7 +35,7 @@ import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.gbuffer import shade_through
 from jaxrender.pipelines.pixel_ids import (
     ID_KINDS,
@@ -46,7 +46,10 @@ from jaxrender.pipelines.pixel_ids import (
     surface_ids,
 )
 from jaxrender.pipelines.registry import REGISTRY, register
-from jaxrender.pipelines.visibility import Previous, points_from_vis, visibility
+from jaxrender.pipelines.vertex_work import vertex_counts
+from jaxrender.pipelines.transparency import merge_counts, transparent_pass
+from jaxrender.pipelines.visibility import (Previous, points_from_vis, share_visibility,
+                                            visibility)
 from jaxrender.pipelines.waves import check_wave_size, tile_waves
 from jaxrender.raster.motion import reproject_with_motion
 from jaxrender.scene.animation import positions_at
@@ -59,7 +62,7 @@ NEIGHBOURS = ((0, -1), (0, 1), (-1, 0), (1, 0))  # (dy, dx): left, right, up, do
 
 
 @dataclass(frozen=True)
-class CheckerboardConfig(PipelineConfig):
+class CheckerboardConfig(BlendingConfig):
     """pattern: ``checker`` (pixel checker) or ``2x1`` (half-width, 2 samples per pixel).
     frame: frame-index offset of the checker (frame t shades parity frame + t).
     temporal: reuse the reprojected previous frame (frames after the first of a sequence);
@@ -244,11 +247,17 @@ def checker_frame(scene, camera, t, prev: History, cfg: CheckerboardConfig):
     with jax.named_scope("shade"):
         img, work = shade_checker(scene, camera, vis, plan, cfg)
     rec = reconstruct(img, vis, ids, camera, prev, plan, cfg)
-    image = poison_on_overflow(rec.image, vis.counts["overflow"])
+    # The history holds the opaque resolve: the transparent layers are blended anew each
+    # frame, as engines do, never reprojected into the opaque surfaces.
+    opaque = poison_on_overflow(rec.image, vis.counts["overflow"])
+    image, blended = transparent_pass(scene, camera, rec.image, vis.depth, cfg)
     with jax.named_scope("counts"):
-        counts = _counts(vis, plan, rec, work, cfg)
-    frame = Frame(image, counts, {"shaded": plan.active, "history": rec.use_history})
-    return frame, History(image, plan.active, ids, vis.depth, camera, jnp.asarray(True))
+        counts = merge_counts(_counts(vis, plan, rec, work, cfg), blended)
+        counts.update(vertex_counts(scene, full_passes=1))  # the raster pass
+    image = poison_on_overflow(image, counts["overflow"])
+    aux = {"shaded": plan.active, "history": rec.use_history}
+    frame = Frame(image, counts, share_visibility(aux, vis, cfg))
+    return frame, History(opaque, plan.active, ids, vis.depth, camera, jnp.asarray(True))
 
 
 def _counts(vis, plan: CheckerPlan, rec: Reconstruction, work: dispatch.WorkList,

@@ -34,19 +34,21 @@ import numpy as np
 
 import jaxrender.pipelines.dacs_warp as dacs_warp
 import jaxrender.pipelines.dispatch as dispatch
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.dacs_levels import SPACINGS, level_map, level_pixels, parent_pairs
 from jaxrender.pipelines.gbuffer import shade_through
 from jaxrender.pipelines.pixel_ids import ID_KINDS, LUMAS, SPACES, check_choice, luma, surface_ids
 from jaxrender.pipelines.registry import REGISTRY, register_frame
-from jaxrender.pipelines.visibility import points_from_vis, visibility
+from jaxrender.pipelines.vertex_work import vertex_counts
+from jaxrender.pipelines.transparency import merge_counts, transparent_pass
+from jaxrender.pipelines.visibility import points_from_vis, share_visibility, visibility
 from jaxrender.types import Array, Frame
 
 BORDERS = ("average", "shade")
 
 
 @dataclass(frozen=True)
-class DacsConfig(PipelineConfig):
+class DacsConfig(BlendingConfig):
     """threshold: luma variance at or above which parents are dissimilar (0: shade everything;
     inf: ids alone decide). spacing: initial spacing 4 (five levels) or 8 (seven).
     ids: which surface id separates parents: triangle, object, material or none.
@@ -220,13 +222,16 @@ def frame(scene, camera, cfg: DacsConfig) -> Frame:
             shade_fn, ids, covered, cfg.threshold, spacing=cfg.spacing, luma_kind=cfg.luma,
             space=cfg.variance_space, chunk=cfg.chunk, warp_width=cfg.warp_width,
             warp_batches=cfg.warp_batches, border=cfg.border)
-    image = poison_on_overflow(image, vis.counts["overflow"])
+    image, blended = transparent_pass(scene, camera, image, vis.depth, cfg)
     warps = c.pop("warps")
     counts = make_counts(waves=warps, lane_utilization=c["warp_lane_utilization"],
                          shaded_fraction=c["shade_invocations"].astype(jnp.float32)
                          / jnp.maximum(c["covered_pixels"], 1).astype(jnp.float32),
                          alpha_invocations=vis.counts["alpha_invocations"],
-                         overflow=vis.counts["overflow"], **c)
-    return Frame(image, counts, {"level": level, "shaded": shaded})
+                         overflow=vis.counts["overflow"], **c,
+                         **vertex_counts(scene, full_passes=1))  # the raster pass
+    counts = merge_counts(counts, blended)
+    image = poison_on_overflow(image, counts["overflow"])
+    return Frame(image, counts, share_visibility({"level": level, "shaded": shaded}, vis, cfg))
 
 render = REGISTRY["dacs"].render  # the compiled, overflow-checked entry

@@ -19,17 +19,19 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 import jaxrender.raster.samples as sample_patterns
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.gbuffer import (DEPTH_BYTES, GBUFFER_CHANNELS, PIXEL_BYTES,
                                          pack_gbuffer, unpack_gbuffer)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
-from jaxrender.pipelines.visibility import visibility
+from jaxrender.pipelines.vertex_work import vertex_counts
+from jaxrender.pipelines.transparency import merge_counts, refuse_transparency, transparent_pass
+from jaxrender.pipelines.visibility import share_visibility, visibility
 from jaxrender.pipelines.waves import check_wave_size, tile_waves
 from jaxrender.shading import shade, surface_points
 from jaxrender.types import Array, Frame
 
 @dataclass(frozen=True)
-class DeferredConfig(PipelineConfig):
+class DeferredConfig(BlendingConfig):
     """msaa: 1, 2, 4 or 8 samples; per_sample_shading: under MSAA, also shade the samples whose
     surface (triangle) differs from the pixel's representative sample (refused with msaa = 1,
     where there is one sample per pixel and it would do nothing). wave_size: lanes per wave of
@@ -107,6 +109,8 @@ def frame(scene, camera, cfg: DeferredConfig) -> Frame:
     """Deferred shading: G-buffer pass, then one shade per covered pixel (bytes counted)."""
     offsets = sample_patterns.msaa(cfg.msaa) if cfg.msaa > 1 else sample_patterns.CENTER
     n_s = len(offsets)
+    if n_s > 1:
+        refuse_transparency(scene, "deferred with msaa > 1")
     with jax.named_scope("visibility"):
         vis = visibility(scene, camera, cfg, offsets)
     with jax.named_scope("gbuffer"):
@@ -118,11 +122,14 @@ def frame(scene, camera, cfg: DeferredConfig) -> Frame:
             plan.work, lambda it: unpack_gbuffer(gbuf[it], camera, jnp.ones(it.shape, bool)),
             lambda pts: shade(pts, scene), jnp.zeros((gbuf.shape[0], 3), jnp.float32), cfg.chunk)
     with jax.named_scope("resolve"):
-        image = poison_on_overflow(resolve_samples(lit, plan, cfg), vis.counts["overflow"])
+        image = resolve_samples(lit, plan, cfg)
+    image, blended = transparent_pass(scene, camera, image, vis.depth, cfg)
     with jax.named_scope("counts"):
-        counts = _counts(vis, plan, attributes, lighting, cfg)
+        counts = merge_counts(_counts(vis, plan, attributes, lighting, cfg), blended)
+        counts.update(vertex_counts(scene, full_passes=1))  # the G-buffer pass
+    image = poison_on_overflow(image, counts["overflow"])
     shade_count = jnp.sum(plan.active, axis=0, dtype=jnp.int32).reshape(cfg.height, cfg.width)
-    return Frame(image, counts, {"shade_count": shade_count})
+    return Frame(image, counts, share_visibility({"shade_count": shade_count}, vis, cfg))
 
 
 def _counts(vis, plan: LightingPlan, attributes: dispatch.WorkList,

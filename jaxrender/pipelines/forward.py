@@ -21,14 +21,19 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 import jaxrender.raster.samples as sample_patterns
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.dispatch import dispatch_lanes
+from jaxrender.pipelines.draw_waves import draw_waves
+from jaxrender.pipelines.micro_batch import triangle_batches
 from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of_segment_index,
                                        quad_list, segment_starts)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
+from jaxrender.pipelines.vertex_work import vertex_counts
+from jaxrender.pipelines.transparency import (LAYER_CHANNELS, forward_blend, forward_front,
+                                              forward_split, layer_shader)
 from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
                                             points_at_xy, raster_fragments)
-from jaxrender.pipelines.waves import check_wave_size, count_waves, group_sizes
+from jaxrender.pipelines.waves import check_wave_size
 from jaxrender.shading import alpha_test, shade
 from jaxrender.sorting import lex_sort
 from jaxrender.types import Array, Frame
@@ -37,24 +42,30 @@ INF = float("inf")
 
 
 @dataclass(frozen=True)
-class ForwardConfig(PipelineConfig):
+class ForwardConfig(BlendingConfig):
     """z_prepass: depth pre-pass then depth-equal shading. msaa: 1, 2, 4 or 8 samples (D3D
     standard positions). shade_helpers: run the shader on quad helper lanes too, as hardware
     does for derivatives (the image is unchanged: derivatives here are analytic; only the work
     grows, as ``counts["shader_evaluations"]`` shows: the live lanes the shader ran on).
-    wave_size: lanes per wave (32 or 64) for the wave counts (quads of one material are packed
-    into waves)."""
+    wave_size: lanes per wave (32 or 64) for the wave counts (the quads of one draw are packed
+    into waves in rasterization order, as hardware launches them). sort_transparent: blend
+    the transparent fragments sorted back to front per pixel (false: in submission order, as
+    an unsorted engine would, order errors and all)."""
 
     z_prepass: bool = False
     msaa: int = 1
     shade_helpers: bool = False
     wave_size: int = 32
+    sort_transparent: bool = True
 
     def __post_init__(self):
         super().__post_init__()
         if self.msaa not in (1, 2, 4, 8):
             raise ValueError(f"msaa must be 1, 2, 4 or 8, got {self.msaa}")
         check_wave_size(self.wave_size)
+        if not self.sort_transparent and self.oit == "weighted":
+            raise ValueError("sort_transparent = false has no effect with oit = \"weighted\" "
+                             "(no order at all); set oit = \"sorted\"")
 
 
 class DrawList(NamedTuple):
@@ -167,10 +178,14 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
     def unit_points(items):
         return points_at(scene, camera, clip, cfg, draw.tri[items], draw.pixel[items])
 
+    opaque, transparent = forward_split(scene, draw, cfg)  # transparent: None without
     with jax.named_scope("alpha_test"):
-        keep, alpha_invocations = alpha_pass(scene, draw, unit_points, cfg)
+        keep, alpha_invocations = alpha_pass(scene, opaque, unit_points, cfg)
     with jax.named_scope("depth_test"):
-        shade_unit, win = depth_test(draw, keep, n_s, cfg)
+        shade_unit, win = depth_test(opaque, keep, n_s, cfg)
+        blended = forward_front(draw, transparent, keep, cfg)
+        if blended is not None:  # shaded in the main pass, blended after it
+            shade_unit = shade_unit | blended
     with jax.named_scope("quads"):
         ql = quad_list(draw.tri, draw.pixel, shade_unit, cfg.width, cfg.height,
                        scene.faces.shape[0])
@@ -181,16 +196,30 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
                 ql["n_quads"] * 4, _helper_lane_fn(scene, camera, clip, cfg, ql), colours,
                 cfg.chunk)
         else:
-            colours, work = dispatch.shade(dispatch.WorkList.of(shade_unit), unit_points,
-                                           lambda p: shade(p, scene), colours, cfg.chunk)
+            colours, work = forward_shade(scene, camera, shade_unit, unit_points, blended, cfg)
     with jax.named_scope("resolve"):
-        image, covered = resolve_samples(colours, draw, win, n_s, cfg)
-        image = poison_on_overflow(image, draw.overflow)
+        image, covered = resolve_samples(colours[:, :3], draw, win, n_s, cfg)
     with jax.named_scope("counts"):
         counts = _counts(scene, draw, ql, work.invocations, covered, alpha_invocations, cfg)
+        # The pre-pass transforms every vertex again (positions only).
+        counts.update(vertex_counts(scene, full_passes=1, position_passes=int(cfg.z_prepass)))
+    image, counts = forward_blend(scene, draw, blended, colours, image, counts, cfg)
+    image = poison_on_overflow(image, counts["overflow"])
     per_pixel = jnp.zeros((cfg.width * cfg.height,), jnp.int32).at[
         jnp.where(shade_unit, draw.pixel, cfg.width * cfg.height)].add(1, mode="drop")
     return Frame(image, counts, {"shade_count": per_pixel.reshape(cfg.height, cfg.width)})
+
+
+def forward_shade(scene, camera, shade_unit, unit_points, blended, cfg):
+    """The main pass's one dispatch: with transparency, its transparent units return the
+    transparent pass's layer values (colour, opacity, view depth) too."""
+    if blended is None:
+        shader, channels = (lambda p: shade(p, scene)), 3
+    else:
+        shader, channels = layer_shader(scene, camera), LAYER_CHANNELS
+    colours = jnp.zeros((shade_unit.shape[0], channels), jnp.float32)
+    return dispatch.shade(dispatch.WorkList.of(shade_unit), unit_points, shader, colours,
+                          cfg.chunk)
 
 
 def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
@@ -205,18 +234,14 @@ def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
 
 
 def _counts(scene, draw: DrawList, ql, invocations, covered, alpha_invocations, cfg) -> dict:
-    """Waves: the quads of one material are packed into waves of their own."""
-    n_mat = scene.materials.albedo.shape[0]
-    mat_q = scene.tri_material[jnp.where(ql["start"], ql["tri"], 0)]
-    quads_per_mat = group_sizes(mat_q, ql["start"], n_mat)
-    waves, util = count_waves(quads_per_mat * 4, cfg.wave_size, invocations)
+    """Waves: the quads of one draw, in rasterization order (``draw_waves``)."""
     lanes = ql["n_quads"] * 4
     return make_counts(
         shade_invocations=invocations,
         helper_lanes=lanes - invocations,
         covered_pixels=covered,
-        waves=waves,
-        lane_utilization=util,
+        **draw_waves(triangle_batches(scene.tri_object, scene.tri_material), ql, cfg.wave_size,
+                     invocations),
         quads=ql["n_quads"],
         # The shader's live lanes: the shaded units, plus the helper lanes when they run.
         shader_evaluations=lanes if cfg.shade_helpers else invocations,

@@ -3,7 +3,8 @@ Oxide Games' Nitrous engine (GDC 2016; Baker and Jarzynski 2022).
 
   charts (os_charts) -> virtual shade sheets + triangle-id maps (os_sheet), built once on the host
   visibility buffer -> per-pixel filter taps -> marked 8x8 chunks (os_marking)
-  -> chunks allocated into a fixed store, global MIP bias raised until they fit (os_alloc)
+  -> chunks allocated into a fixed store, global MIP bias raised until they fit (os_alloc),
+     or, with ``bias_feedback``, set from the previous frame's request (os_budget)
   -> owned shadels of the allocated chunks shaded through the chunked dispatch
   -> final pass: every covered pixel samples the store (bilinear / trilinear / anisotropic).
 
@@ -16,6 +17,7 @@ when its inputs did not change (no view-dependent effect, or the eye did not mov
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -23,12 +25,17 @@ import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.os_alloc import allocate
+from jaxrender.pipelines.os_budget import budget_counts, check_config, feedback_allocate
 from jaxrender.pipelines.os_marking import footprint, mark_chunks, mark_shadels, taps
+from jaxrender.pipelines.os_memory import memory_counts
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
 from jaxrender.pipelines.registry import REGISTRY, register
-from jaxrender.pipelines.visibility import visibility
+from jaxrender.pipelines.vertex_work import vertex_counts
+from jaxrender.pipelines.os_transparency import (blend_layers, merge_os_counts, pixel_rows,
+                                                 transparent_samples, transparent_shadels)
+from jaxrender.pipelines.visibility import share_visibility, visibility
 from jaxrender.pipelines.waves import check_wave_size, count_waves
 from jaxrender.shading import shade, surface_points
 from jaxrender.types import Array, Frame, pytree_dataclass
@@ -38,10 +45,15 @@ SHADEL_BYTES = 12  # float32 RGB per shadel in the store
 
 
 @dataclass(frozen=True)
-class ObjectSpaceConfig(PipelineConfig):
+class ObjectSpaceConfig(BlendingConfig):
     """store_shadels: physical store capacity in shadels (0 = 6 per pixel), rounded up to whole
-    8x8 chunks. mip_bias: the starting global MIP bias; bias_step: how much it is raised per
-    retry when the marked chunks do not fit. filter: "trilinear" or "bilinear"; aniso_taps:
+    8x8 chunks; store_per_pixel > 0 sizes it in shadels per pixel of the output instead (so a
+    study's sweep keeps its meaning at any resolution; store_shadels is then refused). mip_bias: the starting global MIP bias; bias_step: how much it is raised per
+    retry when the marked chunks do not fit. bias_feedback: instead of retrying within the frame,
+    carry the bias across frames (os_budget: frame t+1's bias from frame t's request, raised by
+    bias_step over budget, relaxed by bias_relax below bias_low x the store, never below
+    mip_bias; chunks that do not fit are left unshaded, their pixels read the coarsest level).
+    filter: "trilinear" or "bilinear"; aniso_taps:
     taps along the footprint's major axis (1 = isotropic). eps: barycentric clamp
     [-eps, 1 + eps] for shadels outside their owner triangle (Oxide: 1). sheet_resolution:
     level-0 shadels per side for every object (0 = per object from texel_density in shadels per
@@ -54,6 +66,7 @@ class ObjectSpaceConfig(PipelineConfig):
     """
 
     store_shadels: int = 0
+    store_per_pixel: float = 0.0
     mip_bias: float = 0.0
     bias_step: float = 0.25
     filter: str = "trilinear"
@@ -67,12 +80,16 @@ class ObjectSpaceConfig(PipelineConfig):
     shade_every: int = 1
     reuse: bool = True
     wave_size: int = 32
+    bias_feedback: bool = False
+    bias_low: float = 0.8
+    bias_relax: float = 0.0625
 
     def __post_init__(self):
         super().__post_init__()
         if self.filter not in FILTERS:
             raise ValueError(f"filter must be one of {FILTERS}, got {self.filter!r}")
-        checks = {"store_shadels": self.store_shadels >= 0, "bias_step": self.bias_step > 0,
+        checks = {"store_shadels": self.store_shadels >= 0,
+                  "store_per_pixel": self.store_per_pixel >= 0, "bias_step": self.bias_step > 0,
                   "aniso_taps": self.aniso_taps >= 1, "eps": self.eps >= 0,
                   "sheet_resolution": self.sheet_resolution >= 0,
                   "texel_density": self.texel_density > 0,
@@ -82,6 +99,10 @@ class ObjectSpaceConfig(PipelineConfig):
             if not ok:
                 raise ValueError(f"object_space: invalid {k} = {getattr(self, k)!r}")
         check_wave_size(self.wave_size)
+        if self.store_per_pixel > 0 and self.store_shadels != 0:
+            raise ValueError(f"object_space: store_shadels = {self.store_shadels!r} has no "
+                             f"effect with store_per_pixel = {self.store_per_pixel!r} > 0")
+        check_config(self)
         # Nothing accepted and ignored: an explicit sheet_resolution replaces the per-object
         # sizing (texel_density); max_sheet_resolution then only caps it.
         if self.sheet_resolution > 0:
@@ -103,30 +124,38 @@ class ObjectSpaceConfig(PipelineConfig):
                                  f"{cls.max_sheet_resolution}")
 
     def overflow_hint(self) -> str:
-        return (f"the marked chunks do not fit the store even at the largest MIP bias (or "
-                f"fragments overflowed); raise store_shadels (now {self.store_chunks * LANES})"
-                f" or fragment_capacity (now {self.capacity})")
+        what = ("the store holds not even the coarsest chunk of every visible object"
+                if self.bias_feedback else
+                "the marked chunks do not fit the store even at the largest MIP bias")
+        return (f"{what} (or fragments overflowed); raise store_shadels (now "
+                f"{self.store_chunks * LANES}) or fragment_capacity (now {self.capacity})")
 
     @property
     def store_chunks(self) -> int:
-        shadels = int(self.store_shadels or 6 * self.width * self.height)
+        if self.store_per_pixel > 0:
+            shadels = math.ceil(self.store_per_pixel * self.width * self.height)
+        else:
+            shadels = int(self.store_shadels or 6 * self.width * self.height)
         return max(1, -(-shadels // LANES))
 
 
 @pytree_dataclass
 class StoreState:
     """The physical store carried between frames: page int32[NC] (slot of each virtual chunk,
-    -1 not resident), colour float32[cap * 64, 3], eye float32[3] of the frame it was shaded."""
+    -1 not resident), colour float32[cap * 64, 3], eye float32[3] of the frame it was shaded;
+    with bias_feedback, bias float32 (the next frame's MIP bias; None without)."""
 
     page: Array
     colour: Array
     eye: Array
+    bias: Array | None = None
 
 
 def empty_state(sheet: ShadeSheet, cfg: ObjectSpaceConfig) -> StoreState:
+    bias = jnp.float32(cfg.mip_bias) if cfg.bias_feedback else None
     return StoreState(jnp.full((sheet.n_chunks,), -1, jnp.int32),
                       jnp.zeros((cfg.store_chunks * LANES, 3), jnp.float32),
-                      jnp.full((3,), jnp.nan, jnp.float32))
+                      jnp.full((3,), jnp.nan, jnp.float32), bias)
 
 
 def prepare(scene, cfg: ObjectSpaceConfig) -> ShadeSheet:
@@ -178,8 +207,9 @@ def shadel_points(scene, camera, sheet: ShadeSheet, slot_chunk: Array, items: Ar
 class Residency(NamedTuple):
     """The store after marking and allocation: ``al`` (os_alloc's Allocation), ``live`` bool[cap]
     (slots in use), ``owned`` bool[NC, 64] (shadels with an owner triangle), ``owned_slot``
-    bool[cap, 64], ``reused`` bool[cap] (slots whose colours are kept from the previous frame)
-    and ``colour`` float32[cap * 64, 3] (the kept colours, 0 elsewhere)."""
+    bool[cap, 64], ``reused`` bool[cap] (slots whose colours are kept from the previous frame),
+    ``colour`` float32[cap * 64, 3] (the kept colours, 0 elsewhere) and, with bias_feedback,
+    ``budget`` (os_budget's Budget; None without)."""
 
     al: object
     live: Array
@@ -187,6 +217,7 @@ class Residency(NamedTuple):
     owned_slot: Array
     reused: Array
     colour: Array
+    budget: object = None
 
 
 class Resolved(NamedTuple):
@@ -194,6 +225,7 @@ class Resolved(NamedTuple):
     missing: Array  # taps whose chunk is not resident
     unowned: Array  # taps that read a shadel no triangle owns
     overflow: Array
+    rows: Array  # every tapped sample's read: the pixels', then any transparent fragments'
 
 
 def plan_store(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: StoreState,
@@ -202,7 +234,11 @@ def plan_store(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
     those resident from the previous frame when nothing they depend on changed."""
     cap = cfg.store_chunks
     with jax.named_scope("mark_allocate"):
-        al = allocate(fp, sheet, cap, cfg.mip_bias, cfg.bias_step, cfg.filter, cfg.aniso_taps)
+        if cfg.bias_feedback:
+            al, budget = feedback_allocate(fp, sheet, cfg, state.bias)
+        else:
+            al, budget = allocate(fp, sheet, cap, cfg.mip_bias, cfg.bias_step, cfg.filter,
+                                  cfg.aniso_taps), None
         live = jnp.arange(cap, dtype=jnp.int32) < al.n_alloc  # slots in use
         v_of_slot = jnp.maximum(al.slot_chunk, 0)
         owned = (sheet.owner.reshape(sheet.n_chunks, LANES) >= 0)  # [NC, 64]
@@ -218,7 +254,7 @@ def plan_store(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
         src = jnp.maximum(prev, 0)[:, None] * LANES + jnp.arange(LANES, dtype=jnp.int32)[None, :]
         colour = jnp.where(reused[:, None, None], state.colour[src],
                            0.0).reshape(cap * LANES, 3)
-    return Residency(al, live, owned, owned_slot, reused, colour)
+    return Residency(al, live, owned, owned_slot, reused, colour, budget)
 
 
 def resolve_taps(colour: Array, sheet: ShadeSheet, al, vis, cfg) -> Resolved:
@@ -233,11 +269,11 @@ def resolve_taps(colour: Array, sheet: ShadeSheet, al, vis, cfg) -> Resolved:
     image = colour[addr[:, 0]] * weight[:, 0, None]
     for k in range(1, addr.shape[1]):
         image = image + colour[addr[:, k]] * weight[:, k, None]
-    image = image.reshape(cfg.height, cfg.width, 3)
+    rows, image = image, image[:cfg.width * cfg.height].reshape(cfg.height, cfg.width, 3)
     missing = jnp.sum(use & (slot < 0), dtype=jnp.int32)
     unowned = jnp.sum(use & (sheet.owner[t.chunk * LANES + t.lane] < 0), dtype=jnp.int32)
     overflow = al.overflow + vis.counts["overflow"] + (missing > 0).astype(jnp.int32)
-    return Resolved(poison_on_overflow(image, overflow), missing, unowned, overflow)
+    return Resolved(poison_on_overflow(image, overflow), missing, unowned, overflow, rows)
 
 
 def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: StoreState,
@@ -250,7 +286,9 @@ def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
         flat = lambda a: a.reshape((n_pix,) + a.shape[2:])  # noqa: E731
         fp = footprint(scene, sheet, flat(vis.tri_id), flat(vis.bary), flat(vis.dbary_dx),
                        flat(vis.dbary_dy))
-    res = plan_store(scene, sheet, camera, cfg, state, fp, shade_frame)
+    # Transparent layers in front of the opaque depth are samples too: they mark chunks.
+    fp_all, blended = transparent_samples(scene, sheet, camera, cfg, vis, fp)
+    res = plan_store(scene, sheet, camera, cfg, state, fp_all, shade_frame)
     with jax.named_scope("shade"):
         active = (res.owned_slot & (res.live & ~res.reused)[:, None]).reshape(-1)
         colour, work = dispatch.shade(
@@ -259,11 +297,20 @@ def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
             lambda pts: shade(pts, scene), res.colour, cfg.chunk)
     with jax.named_scope("resolve"):
         out = resolve_taps(colour, sheet, res.al, vis, cfg)
+    image, layered = blend_layers(scene, camera, blended, out.rows, out.image, cfg)
     with jax.named_scope("counts"):
-        counts, aux = _counts(scene, sheet, cfg, fp, res, work, out, vis)
+        pix_res = res if blended is None else res._replace(
+            al=res.al._replace(taps=pixel_rows(res.al.taps, n_pix)))
+        counts, aux = _counts(scene, sheet, cfg, fp, pix_res, work, out, vis)
+        if blended is not None:
+            counts = merge_os_counts(counts, layered, transparent_shadels(
+                scene, sheet, res.al.slot_chunk, work))
+        counts.update(vertex_counts(scene, full_passes=1))  # the raster pass
+    image = poison_on_overflow(image, counts["overflow"])
     new_state = StoreState(res.al.page, colour,
-                           jnp.where(shade_frame, camera.eye, state.eye).astype(jnp.float32))
-    return Frame(out.image, counts, aux), new_state
+                           jnp.where(shade_frame, camera.eye, state.eye).astype(jnp.float32),
+                           None if res.budget is None else res.budget.next_bias)
+    return Frame(image, counts, share_visibility(aux, vis, cfg)), new_state
 
 
 def _counts(scene, sheet, cfg, fp, res: Residency, work: dispatch.WorkList, out: Resolved, vis):
@@ -314,6 +361,8 @@ def _counts(scene, sheet, cfg, fp, res: Residency, work: dispatch.WorkList, out:
         unowned_taps=out.unowned,
         alpha_invocations=vis.counts["alpha_invocations"],
         overflow=out.overflow,
+        **memory_counts(sheet, al.page, al.slot_chunk),
+        **({} if res.budget is None else budget_counts(res.budget)),
     )
     # Oxide's marking view: per pixel, the chunk its heaviest tap reads: 1 hit, 2 fully visible
     # (every owned shadel of the chunk is needed).

@@ -244,12 +244,15 @@ def bind(pipe, cfg, compiled, prepared: Prepared) -> Callable:
     """``call(scene, cameras, t=None) -> Frame``: the compiled program with its prepared
     arguments, overflow-checked like ``render``."""
 
-    def call(scene, cameras, t=None):
-        """``t``: the frame index of the (first) frame; default: the one it was lowered for."""
+    def call(scene, cameras, t=None, traced=None):
+        """``t``: the frame index of the (first) frame; default: the one it was lowered for.
+        ``traced``: other values of the config's TRACED_FIELDS (``split_config``'s second
+        half of a config that differs from ``cfg`` in them only); default: ``cfg``'s."""
         if prepared.sequence:
             cameras = stack_cameras(cameras)
         start = prepared.start if t is None else t
-        frame = compiled(scene, prepared.static, cameras, prepared.traced,
+        values = prepared.traced if traced is None else traced
+        frame = compiled(scene, prepared.static, cameras, values,
                          jnp.asarray(start, jnp.int32))
         return check_overflow(pipe, cfg, frame)
 

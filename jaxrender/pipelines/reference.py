@@ -30,6 +30,9 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines.registry import REGISTRY, RenderConfig, register_frame
+from jaxrender.pipelines.vertex_work import vertex_counts
+from jaxrender.pipelines.transparency import sample_pass
+from jaxrender.pipelines.visibility import opaque_faces
 from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
                                         sample_visibility)
 from jaxrender.raster.resolve import barycentrics_at
@@ -103,13 +106,17 @@ def _visibility(scene: Scene, camera: Camera, clip: Array, offset: Array, cfg, i
             return alpha_test(pts, scene)
 
     vis, counts = sample_visibility(
-        clip, faces, w, h, offset, work_capacity=default_work_capacity(n_tris, w, h),
+        clip, opaque_faces(scene), w, h, offset, work_capacity=default_work_capacity(n_tris, w, h),
         clip_capacity=default_clip_capacity(n_tris),
         keep=alpha_keep if scene.effects.alpha_test else None)
     return vis, {key: v.astype(jnp.int32) for key, v in counts.items()}
 
 
 # ------------------------------------------------------------------ the render
+
+# The transparent pass's counts summed over the samples (the layers' maximum is a maximum).
+TRANSPARENT_SUMS = ("transparent_invocations", "transparent_fragments", "transparent_passes",
+                    "transparent_bytes", "overflow")
 
 
 def _offset(s: Array, k: Array) -> Array:
@@ -149,19 +156,32 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
         new = {"shade_invocations": work.invocations, "lanes": work.lanes,
                "chunks": work.chunks, "fragments": rc["fragments"],
                "work_items": rc["work_items"]}
+        if scene.effects.transparency:  # every layer of this sample, sorted, over it
+            with jax.named_scope("transparent"):
+                rgb, tc = sample_pass(scene, camera, clip, _offset(s, k), vis.depth.reshape(-1),
+                                      rgb, inv_k, cfg)
+            new.update({key: tc[key] for key in TRANSPARENT_SUMS})
+            new["shade_invocations"] = new["shade_invocations"] + tc["transparent_invocations"]
+            new["transparent_layers_max"] = jnp.maximum(
+                counts["transparent_layers_max"], tc["transparent_layers_max"]) - counts[
+                "transparent_layers_max"]  # accumulated as a running maximum
         counts = {key: counts[key] + new[key] for key in counts}
         return acc + rgb, any_cov | (tri >= 0), counts
 
     zero = jnp.int32(0)
-    counts0 = {key: zero for key in
-               ("shade_invocations", "lanes", "chunks", "fragments", "work_items")}
+    keys = ("shade_invocations", "lanes", "chunks", "fragments", "work_items")
+    if scene.effects.transparency:
+        keys = keys + TRANSPARENT_SUMS + ("transparent_layers_max",)
+    counts0 = {key: zero for key in keys}
     init = (jnp.zeros((n_pix, 3), jnp.float32), jnp.zeros((n_pix,), bool), counts0)
     acc, any_cov, counts = jax.lax.fori_loop(0, k * k, one_sample, init)
     with jax.named_scope("reconstruct"):
         image = (acc * (inv_k * inv_k)).reshape(h, w, 3)
     counts = dict(counts, covered_pixels=jnp.sum(any_cov, dtype=jnp.int32),
                   samples_per_pixel=k * k,
-                  helper_lanes=counts["lanes"] - counts["shade_invocations"])
+                  helper_lanes=counts["lanes"] - counts["shade_invocations"],
+                  # One transform of every vertex serves all k x k sample rasterizations.
+                  **vertex_counts(scene, full_passes=1))
     return Frame(image=image, counts=counts, aux={"coverage": any_cov.reshape(h, w)})
 
 

@@ -16,22 +16,24 @@ Each frame the projection is jittered by a Halton(2, 3) offset (``taa_phases`` p
   current frame elsewhere.
 
 State: ``History`` (output, depth, object ids, unjittered camera of the previous frame). The
-resolve runs its own visibility pass with motion vectors, the same for every pipeline; its cost
-is part of what TAA costs here. Counts: ``taa_history_reads`` (pixels whose history was read)
+resolve reads the visibility buffer the pipeline rasterized (deferred, the visibility buffer,
+checkerboard, DACS, object space hand theirs over) and adds its motion vectors; a pipeline with
+none of one sample per pixel (forward, MSAA deferred, the reference) gets its own pass. Counts: ``taa_history_reads`` (pixels whose history was read)
 and ``taa_rejections`` (of those, rejected as disoccluded), read off the masks that drive the
 blend.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.pipelines.visibility import Previous, visibility
-from jaxrender.raster.motion import disoccluded, previous_position
+from jaxrender.pipelines.visibility import SHARED_VISIBILITY, Previous, visibility
+from jaxrender.raster.motion import disoccluded, motion_vectors, previous_position
 from jaxrender.scene.animation import positions_at
 from jaxrender.scene.camera import Camera, with_jitter_px, without_jitter
 from jaxrender.scene.camera_path import halton
@@ -107,14 +109,18 @@ def sample_history(image: Array, position: Array, kind: str) -> Array:
 
 
 def _neighbourhood(ycocg: Array):
-    """Per pixel, over its 3x3 neighbourhood (clamped at the border): min, max, mean, sigma."""
+    """Per pixel, over its 3x3 neighbourhood (clamped at the border): min, max, mean, sigma.
+    Running reductions over the nine shifted views, so no (9, H, W, 3) stack is built."""
     h, w = ycocg.shape[:2]
     pad = jnp.pad(ycocg, ((1, 1), (1, 1), (0, 0)), mode="edge")
     taps = [pad[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
-    stack = jnp.stack(taps)
-    mean = jnp.mean(stack, axis=0)
-    sigma = jnp.sqrt(jnp.maximum(jnp.mean(stack * stack, axis=0) - mean * mean, 0.0))
-    return jnp.min(stack, axis=0), jnp.max(stack, axis=0), mean, sigma
+    lo, hi, total, squares = taps[0], taps[0], taps[0], taps[0] * taps[0]
+    for tap in taps[1:]:
+        lo, hi = jnp.minimum(lo, tap), jnp.maximum(hi, tap)
+        total, squares = total + tap, squares + tap * tap
+    mean = total / 9.0
+    sigma = jnp.sqrt(jnp.maximum(squares / 9.0 - mean * mean, 0.0))
+    return lo, hi, mean, sigma
 
 
 def bound_history(history: Array, current: Array, mode: str) -> Array:
@@ -177,6 +183,23 @@ def vis_config(cfg) -> VisSettings:
                        int(getattr(cfg, "chunk", 0)), bool(getattr(cfg, "cull_backfaces", False)))
 
 
+def frame_visibility(scene, frame: Frame, camera: Camera, previous: Previous, cfg):
+    """The jittered frame's visibility with motion vectors against ``previous``, and the frame's
+    aux without the shared buffer. A pipeline that rasterized one sample per pixel handed its
+    buffer over (``visibility.share_visibility``): its motion vectors are computed from its
+    own ids and barycentrics. The others (forward, the reference) get a visibility pass here,
+    whose fragment overflow is added to theirs."""
+    aux = {k: v for k, v in frame.aux.items() if k != SHARED_VISIBILITY}
+    shared = frame.aux.get(SHARED_VISIBILITY)
+    if shared is None:
+        return visibility(scene, camera, vis_config(cfg), previous=previous), aux, True
+    with jax.named_scope("motion_vectors"):
+        motion, prev_depth = motion_vectors(shared.tri_id, shared.bary, scene.faces,
+                                            scene.positions, camera, previous.positions,
+                                            previous.camera, cfg.width, cfg.height)
+    return dataclasses.replace(shared, motion=motion, prev_depth=prev_depth), aux, False
+
+
 def step(pipe, scene, static, state, camera: Camera, t: Array, cfg):
     """``pipe``'s step with TAA: state is (the pipeline's state, History)."""
     inner, hist = state
@@ -184,14 +207,14 @@ def step(pipe, scene, static, state, camera: Camera, t: Array, cfg):
     frame, inner = pipe.step(scene, static, inner, jcam, t, cfg)
     with jax.named_scope("taa"):
         previous = Previous(positions_at(scene, t - 1), hist.camera)
-        vis = visibility(scene, jcam, vis_config(cfg), previous=previous)
+        vis, aux, own_pass = frame_visibility(scene, frame, jcam, previous, cfg)
         objects = jnp.where(vis.tri_id >= 0, scene.tri_object[jnp.maximum(vis.tri_id, 0)], -1)
         res = resolve(frame.image, vis, objects, hist, camera, cfg)
     counts = dict(frame.counts, taa_history_reads=jnp.sum(res.read, dtype=jnp.int32),
                   taa_rejections=jnp.sum(res.rejected, dtype=jnp.int32))
-    if "overflow" in counts:
+    if own_pass and "overflow" in counts:
         counts["overflow"] = counts["overflow"] + vis.counts["overflow"]
-    aux = dict(frame.aux, taa_rejected=res.rejected)
+    aux = dict(aux, taa_rejected=res.rejected)
     new = History(res.image, vis.depth, objects, without_jitter(camera), jnp.asarray(True))
     return Frame(res.image, counts, aux), (inner, new)
 

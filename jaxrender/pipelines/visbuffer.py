@@ -2,12 +2,18 @@
 pixel; shading decodes the id, fetches the triangle, computes perspective-correct barycentrics
 and their analytic derivatives at the pixel, and shades. No quads, so no helper lanes.
 
-Shading work is classified into 8x8 tiles per material and packed into waves of 32 or 64 lanes;
-the work list is ordered by (material, rate, tile, wave), and the wave counts are read off it.
+Shading work is classified by loose tiling (``tiling = "loose"``, Decima's: inside each 128x128
+tile the pixels of one batch group fill complete waves, with 16-bit pixel and 32-bit wave
+commands; ``pipelines.loose_tiles``) or into 8x8 tiles per material (``tiling = "tiles"``, the
+scheme the talk rejected), packed into waves of 32 or 64 lanes; the work list is in wave order,
+and the wave and command counts are read off it.
 Software VRS: each pixel gets a rate 1x1, 1x2, 2x1 or 2x2 (width x height) from a per-triangle
-rule (view distance or screen-space speed) or a rate image; the pixels of one material and rate
-in one aligned coarse block share a single shade at the block's first pixel, broadcast to them.
-Waves of coarse pixels are formed on the coarse grid of their rate.
+rule (view distance or screen-space speed), a rate image, or per 8x8 tile from the speed of
+the frame's motion vectors (``vrs = "motion"``, camera motion included; ``pipelines.vrs``);
+the pixels of one material and rate in one aligned coarse block share a single shade at the
+block's first pixel, broadcast to them. Under 8x8 tiles, waves of coarse pixels are formed on
+the coarse grid of their rate; under loose tiles a lane shades one coarse pixel, its rate in
+its pixel command. With the micro-batch ids the rate travels in the id's top bits.
 """
 
 from __future__ import annotations
@@ -17,98 +23,56 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 import jaxrender.pipelines.dispatch as dispatch
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+import jaxrender.pipelines.micro_batch as micro_batch
+from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.id_layout import IdLayout, decode, encode, pack_ids  # noqa: F401
+from jaxrender.pipelines.loose_tiles import TILINGS, command_counts, loose_order
+from jaxrender.pipelines.micro_batch import RATE_BITS, MicroBatches, micro_batches
 from jaxrender.pipelines.quads import BIG, first_of_segment_index, segment_starts
-from jaxrender.pipelines.registry import REGISTRY, register_frame
-from jaxrender.pipelines.visibility import clip_vertices, points_at, visibility
-from jaxrender.pipelines.waves import TILE, check_wave_size, count_waves, segment_lanes
-from jaxrender.scene.camera import world_to_clip
+from jaxrender.pipelines.registry import REGISTRY, register
+from jaxrender.pipelines.transparency import merge_counts, transparent_pass
+from jaxrender.pipelines.vertex_work import VERTEX_FETCHES, vertex_counts, wave_triangles
+from jaxrender.pipelines.visibility import (Previous, clip_vertices, points_at,
+                                            share_visibility, visibility)
+from jaxrender.pipelines.vrs import RATE_H, RATE_W, RATES, SPEED_MODES, VRS_MODES, pixel_rates
+from jaxrender.pipelines.waves import TILE, check_wave_size
+from jaxrender.scene.animation import positions_at
 from jaxrender.shading import shade
 from jaxrender.sorting import lex_sort
 from jaxrender.types import Array, Frame
 
-EMPTY_ID = 0xFFFFFFFF
-RATES = ("1x1", "1x2", "2x1", "2x2")  # width x height, as D3D12_SHADING_RATE_AxB
-RATE_W = (1, 1, 2, 2)
-RATE_H = (1, 2, 1, 2)
-VRS_MODES = ("off", "fixed", "distance", "speed", "image")
+ID_LAYOUTS = ("micro_batch", "fixed")
 
 
 @dataclass(frozen=True)
-class IdLayout:
-    """Bit fields of the 32-bit visibility id, most significant first: micro batch, primitive
-    (inside its batch), instance. A triangle ``t`` of object (instance) ``i`` whose first
-    triangle is ``f`` has local index ``t - f = batch * 2^primitive_bits + primitive``."""
+class VisBufferConfig(BlendingConfig):
+    """id_layout: micro_batch (Decima's: 16-bit micro batch, then primitive and instance bits
+    sized per batch, the VRS rate in the top 2 bits; ``pipelines.micro_batch``) or fixed (the
+    fields below). batch_bits / primitive_bits / instance_bits: the fixed 32-bit id layout (see
+    IdLayout), refused with id_layout = micro_batch when they differ from their defaults.
+    wave_size: 32 or 64 lanes. tiling: loose (128x128 tiles, waves of one batch group) or tiles
+    (8x8 material tiles). vertex_fetch: wave (shading transforms each distinct triangle's
+    vertices once per wave: Decima's vertex wave commands) or pixel (three per shaded pixel);
+    it sets counts["vertex_invocations"]. vrs: off | fixed | distance | speed | image |
+    motion. vrs_rate: the rate of ``fixed`` (1x1, 1x2, 2x1, 2x2). vrs_thresholds (a, b): for
+    ``distance`` (world units from the eye to the triangle's centroid), ``speed`` (screen
+    pixels per frame of the centroid, from scene.velocity) and ``motion`` (screen pixels per
+    frame of the slowest pixel of each 8x8 tile, from the motion vectors against the previous
+    frame: object and camera motion; a sequence's first frame sees no camera motion): below a
+    1x1, from a to b 2x1 (1x2 for mostly vertical motion), from b 2x2. rate_image: rows of
+    rate names stretched over the screen (nearest cell). Each VRS setting is refused away from
+    its mode (vrs_rate unless ``fixed``, vrs_thresholds unless ``distance``, ``speed`` or
+    ``motion``, rate_image unless ``image``) when it differs from its default."""
 
-    batch_bits: int = 16
-    primitive_bits: int = 7
-    instance_bits: int = 9
-
-    def __post_init__(self):
-        bits = (self.batch_bits, self.primitive_bits, self.instance_bits)
-        if min(bits) < 0 or sum(bits) > 32:
-            raise ValueError(f"id layout {bits}: fields must be >= 0 and sum to <= 32 bits")
-
-    def pack(self, batch, prim, inst):
-        """(uint32 ids, bool overflow) for int32 arrays; an overflowing field, or an id equal to
-        the empty value 0xFFFFFFFF, sets overflow."""
-        batch, prim, inst = (jnp.asarray(a, jnp.int32) for a in (batch, prim, inst))
-        over = jnp.zeros(batch.shape, bool)
-        for v, bits in ((batch, self.batch_bits), (prim, self.primitive_bits),
-                        (inst, self.instance_bits)):
-            over = over | (v < 0)
-            if bits < 31:  # an int32 cannot exceed a wider field
-                over = over | (v >= (1 << bits))
-        u = lambda a: a.astype(jnp.uint32)  # noqa: E731
-        pb, ib = self.primitive_bits, self.instance_bits
-        ids = (u(batch) << (pb + ib)) | (u(prim) << ib) | u(inst)
-        if self.batch_bits + pb + ib == 32:  # else the all-ones id is unreachable
-            over = over | (ids == jnp.uint32(EMPTY_ID))
-        return ids, over
-
-    def unpack(self, ids):
-        """uint32 ids -> (batch, primitive, instance) int32."""
-        ids = jnp.asarray(ids, jnp.uint32)
-        pb, ib = self.primitive_bits, self.instance_bits
-        mask = lambda b: jnp.uint32((1 << b) - 1)  # noqa: E731
-        inst = ids & mask(ib)
-        prim = (ids >> ib) & mask(pb)
-        batch = (ids >> (pb + ib)) & mask(self.batch_bits)
-        return batch.astype(jnp.int32), prim.astype(jnp.int32), inst.astype(jnp.int32)
-
-
-def pack_ids(layout: IdLayout, batch, prim, inst):
-    """Eager packing that refuses overflow: raises OverflowError naming the field."""
-    b, p, i = (np.asarray(a) for a in (batch, prim, inst))
-    for name, v, bits in (("batch", b, layout.batch_bits), ("primitive", p, layout.primitive_bits),
-                          ("instance", i, layout.instance_bits)):
-        if v.size and (v.min() < 0 or v.max() >= (1 << bits)):
-            raise OverflowError(f"visibility id: {name} value {int(v.max())} does not fit in "
-                                f"{bits} bits")
-    ids, over = layout.pack(b, p, i)
-    if bool(jnp.any(over)):
-        raise OverflowError("visibility id: the packed id equals the reserved empty id")
-    return ids
-
-
-@dataclass(frozen=True)
-class VisBufferConfig(PipelineConfig):
-    """batch_bits / primitive_bits / instance_bits: the 32-bit id layout (see IdLayout).
-    wave_size: 32 or 64 lanes. vrs: off | fixed | distance | speed | image. vrs_rate: the rate
-    of ``fixed`` (1x1, 1x2, 2x1, 2x2). vrs_thresholds (a, b): for ``distance`` (world units from
-    the eye to the triangle's centroid) and ``speed`` (screen pixels per frame of the centroid,
-    from scene.velocity): below a 1x1, from a to b 2x1 (1x2 for mostly vertical motion), from b
-    2x2. rate_image: rows of rate names stretched over the screen (nearest cell). Each VRS
-    setting is refused away from its mode (vrs_rate unless ``fixed``, vrs_thresholds unless
-    ``distance`` or ``speed``, rate_image unless ``image``) when it differs from its default."""
-
+    id_layout: str = "micro_batch"
     batch_bits: int = 16
     primitive_bits: int = 7
     instance_bits: int = 9
     wave_size: int = 32
+    tiling: str = "loose"
+    vertex_fetch: str = "wave"
     vrs: str = "off"
     vrs_rate: str = "2x2"
     vrs_thresholds: tuple = (8.0, 20.0)
@@ -121,6 +85,20 @@ class VisBufferConfig(PipelineConfig):
                                                      for row in self.rate_image))
         self.layout  # validates the bit fields
         check_wave_size(self.wave_size)
+        if self.id_layout not in ID_LAYOUTS:
+            raise ValueError(f"id_layout must be one of {', '.join(ID_LAYOUTS)}, "
+                             f"got {self.id_layout!r}")
+        if self.id_layout != "fixed":
+            for f in ("batch_bits", "primitive_bits", "instance_bits"):
+                if getattr(self, f) != getattr(type(self), f):
+                    raise ValueError(f"{f} = {getattr(self, f)} has no effect with id_layout = "
+                                     f"{self.id_layout!r} (it sizes the fixed layout); set "
+                                     f"id_layout = 'fixed'")
+        if self.vertex_fetch not in VERTEX_FETCHES:
+            raise ValueError(f"vertex_fetch must be one of {', '.join(VERTEX_FETCHES)}, got "
+                             f"{self.vertex_fetch!r}")
+        if self.tiling not in TILINGS:
+            raise ValueError(f"tiling must be one of {', '.join(TILINGS)}, got {self.tiling!r}")
         if self.vrs not in VRS_MODES:
             raise ValueError(f"vrs must be one of {', '.join(VRS_MODES)}, got {self.vrs!r}")
         if self.vrs_rate not in RATES:
@@ -139,9 +117,10 @@ class VisBufferConfig(PipelineConfig):
         if self.vrs != "fixed" and self.vrs_rate != cls.vrs_rate:
             raise ValueError(f"vrs_rate = {self.vrs_rate!r} has no effect with vrs = {self.vrs!r}"
                              f" (it is the rate of vrs = 'fixed')")
-        if self.vrs not in ("distance", "speed") and self.vrs_thresholds != cls.vrs_thresholds:
+        if self.vrs not in SPEED_MODES and self.vrs_thresholds != cls.vrs_thresholds:
             raise ValueError(f"vrs_thresholds = {self.vrs_thresholds} have no effect with vrs = "
-                             f"{self.vrs!r} (they apply to vrs = 'distance' and 'speed')")
+                             f"{self.vrs!r} (they apply to vrs = 'distance', 'speed' and "
+                             f"'motion')")
         if self.vrs != "image" and self.rate_image:
             raise ValueError(f"rate_image has no effect with vrs = {self.vrs!r} (it is the rate "
                              f"map of vrs = 'image')")
@@ -151,91 +130,30 @@ class VisBufferConfig(PipelineConfig):
         return IdLayout(self.batch_bits, self.primitive_bits, self.instance_bits)
 
 
-def object_first_triangle(scene) -> jax.Array:
-    """int32[T]: entry i is the first triangle of object i (objects are contiguous)."""
-    t = scene.faces.shape[0]
-    return jnp.full((t,), BIG, jnp.int32).at[scene.tri_object].min(
-        jnp.arange(t, dtype=jnp.int32), mode="drop")
-
-
-def encode(scene, tri, layout: IdLayout):
-    """int32 triangle ids (-1 = empty) -> (uint32 packed ids, overflow count)."""
-    first = object_first_triangle(scene)
-    t = jnp.maximum(tri, 0)
-    inst = scene.tri_object[t]
-    local = t - first[inst]
-    ids, over = layout.pack(local >> layout.primitive_bits,
-                            local & ((1 << layout.primitive_bits) - 1), inst)
-    covered = tri >= 0
-    return (jnp.where(covered, ids, jnp.uint32(EMPTY_ID)),
-            jnp.sum(over & covered, dtype=jnp.int32))
-
-
-def decode(scene, ids, layout: IdLayout):
-    """uint32 packed ids -> int32 triangle ids (-1 for the empty id)."""
-    batch, prim, inst = layout.unpack(ids)
-    first = object_first_triangle(scene)
-    tri = first[jnp.minimum(inst, first.shape[0] - 1)] + (batch << layout.primitive_bits) + prim
-    return jnp.where(ids == jnp.uint32(EMPTY_ID), -1, tri)
-
-
-def triangle_rates(scene, camera, cfg) -> jax.Array:
-    """int32[T] rate code (index into RATES) of every triangle under cfg.vrs."""
-    n = scene.faces.shape[0]
-    a, b = cfg.vrs_thresholds
-    if cfg.vrs == "fixed":
-        return jnp.full((n,), RATES.index(cfg.vrs_rate), jnp.int32)
-    centroid = jnp.mean(scene.positions[scene.faces], axis=1)
-    if cfg.vrs == "distance":
-        d = jnp.sqrt(jnp.sum(jnp.square(centroid - camera.eye[None, :]), axis=-1))
-        return jnp.where(d < a, 0, jnp.where(d < b, 2, 3)).astype(jnp.int32)
-    if cfg.vrs == "speed":
-        vel = jnp.mean(scene.velocity[scene.faces], axis=1)
-        aspect = cfg.width / cfg.height
-        c0 = world_to_clip(centroid, camera, aspect)
-        c1 = world_to_clip(centroid + vel, camera, aspect)
-        win = lambda c: c[:, :2] / jnp.maximum(c[:, 3:4], 1e-6)  # noqa: E731
-        dd = (win(c1) - win(c0)) * (jnp.asarray([cfg.width, cfg.height], jnp.float32) * 0.5)
-        s = jnp.sqrt(jnp.sum(dd * dd, axis=-1))
-        mid = jnp.where(jnp.abs(dd[:, 0]) >= jnp.abs(dd[:, 1]), 2, 1)
-        return jnp.where(s < a, 0, jnp.where(s < b, mid, 3)).astype(jnp.int32)
-    return jnp.zeros((n,), jnp.int32)
-
-
-def pixel_rates(scene, camera, cfg, tri) -> jax.Array:
-    """int32[H, W] rate code of every pixel (0 = 1x1 where VRS is off)."""
-    h, w = cfg.height, cfg.width
-    if cfg.vrs == "off":
-        return jnp.zeros((h, w), jnp.int32)
-    if cfg.vrs == "image":
-        grid = np.array([[RATES.index(r) for r in row] for row in cfg.rate_image], np.int32)
-        rows = np.arange(h) * grid.shape[0] // h
-        cols = np.arange(w) * grid.shape[1] // w
-        return jnp.asarray(grid[rows[:, None], cols[None, :]])
-    return triangle_rates(scene, camera, cfg)[jnp.maximum(tri, 0)]
-
-
 class ShadePlan(NamedTuple):
     """The coarse-pixel plan: ``work`` lists the anchors (the first pixel of each coarse pixel)
-    ordered by (material, rate, tile, wave); ``anchor`` int32[P] is each pixel's anchor,
-    ``is_anchor`` bool[P]; ``wave_lanes`` int32[P], the lanes of each wave group of the sorted
-    list; ``rate`` int32[P]."""
+    in wave order; ``anchor`` int32[P] is each pixel's anchor, ``is_anchor`` bool[P];
+    ``run_starts`` bool[P], True at the first item of each wave run of the sorted list (a
+    (tile, batch group) under loose tiling, a (material, rate, tile, wave) under 8x8 tiles),
+    ``live_sorted`` bool[P], the items of the sorted list that exist; ``rate`` int32[P]."""
 
     work: dispatch.WorkList
     anchor: Array
     is_anchor: Array
-    wave_lanes: Array
+    run_starts: Array
+    live_sorted: Array
     rate: Array
 
 
-def plan_coarse_pixels(scene, camera, tri, cfg: VisBufferConfig) -> ShadePlan:
+def plan_coarse_pixels(scene, tri, rate, cfg: VisBufferConfig) -> ShadePlan:
     """One shade per (material, rate, aligned block), at its first pixel; the work list in
-    wave order: coarse pixels of one material and rate, by 8x8 tile of the coarse grid."""
+    wave order (``cfg.tiling``): loose 128x128 tiles, or coarse pixels of one material and
+    rate by 8x8 tile of the coarse grid."""
     w, h = cfg.width, cfg.height
     n_pix = w * h
     covered = tri >= 0
     mat = jnp.where(covered, scene.tri_material[jnp.maximum(tri, 0)], BIG).reshape(-1)
-    rate = pixel_rates(scene, camera, cfg, tri).reshape(-1)
+    rate = rate.reshape(-1)
     pix = jnp.arange(n_pix, dtype=jnp.int32)
     x, y = pix % w, pix // w
     rw = jnp.asarray(RATE_W, jnp.int32)[rate]
@@ -251,6 +169,20 @@ def plan_coarse_pixels(scene, camera, tri, cfg: VisBufferConfig) -> ShadePlan:
     # p_s is a permutation: unique indices let the scatters be plain stores.
     anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted, unique_indices=True)
     is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start, unique_indices=True)
+    n_work = jnp.sum(is_anchor, dtype=jnp.int32)
+    if cfg.tiling == "loose":
+        work, run_starts, live_sorted = loose_order(is_anchor, mat, x, y, w, h, n_mat)
+    else:
+        work, run_starts, live_sorted = _tile_order(is_anchor, mat, rate, bx, by, cfg, n_mat)
+    return ShadePlan(dispatch.WorkList(work, n_work), anchor, is_anchor, run_starts,
+                     live_sorted, rate)
+
+
+def _tile_order(is_anchor, mat, rate, bx, by, cfg: VisBufferConfig, n_mat: int):
+    """8x8 material tiles: anchors by (material, rate, tile of the coarse grid, wave inside
+    the tile). Returns (order, run starts, live entries of the sorted list)."""
+    w, h = cfg.width, cfg.height
+    pix = jnp.arange(w * h, dtype=jnp.int32)
     tiles_w = -(-w // TILE)
     tile = (by // TILE) * tiles_w + bx // TILE
     sub = ((by % TILE) * TILE + bx % TILE) // cfg.wave_size
@@ -258,29 +190,74 @@ def plan_coarse_pixels(scene, camera, tri, cfg: VisBufferConfig) -> ShadePlan:
     n_tiles = tiles_w * -(-h // TILE)
     (wm, wr, wt, wsub), (work,) = lex_sort(
         (big(mat), big(rate), big(tile), big(sub)),
-        (n_mat - 1, n_rates - 1, n_tiles - 1, TILE * TILE // cfg.wave_size), (pix,))
-    n_work = jnp.sum(is_anchor, dtype=jnp.int32)
-    wave_lanes = segment_lanes(segment_starts(wm, wr, wt, wsub), wm != BIG)
-    return ShadePlan(dispatch.WorkList(work, n_work), anchor, is_anchor, wave_lanes, rate)
+        (n_mat - 1, len(RATES) - 1, n_tiles - 1, TILE * TILE // cfg.wave_size), (pix,))
+    live_sorted = wm != BIG
+    return work, segment_starts(wm, wr, wt, wsub) & live_sorted, live_sorted
 
 
-@register_frame("visbuffer", VisBufferConfig)
-def frame(scene, camera, cfg: VisBufferConfig) -> Frame:
-    """Visibility buffer: packed 32-bit ids, shading from the id in material tiles/waves, VRS."""
+class IdCodec(NamedTuple):
+    """The id buffer's encoding under ``cfg.id_layout``: ``micro`` (the micro-batch table) or
+    None for the fixed layout; ``rate_bits`` (2 when the rate travels in the id)."""
+
+    micro: MicroBatches | None
+    rate_bits: int
+
+
+def id_codec(scene, cfg: VisBufferConfig) -> IdCodec:
+    if cfg.id_layout == "fixed":
+        return IdCodec(None, 0)
+    return IdCodec(micro_batches(scene.tri_object, scene.tri_material),
+                   RATE_BITS if cfg.vrs != "off" else 0)
+
+
+def encode_ids(scene, codec: IdCodec, tri, rate, cfg: VisBufferConfig):
+    """int32 triangles (-1 empty) and rate codes -> (uint32 ids, overflow count)."""
+    if codec.micro is None:
+        return encode(scene, tri, cfg.layout)
+    return micro_batch.pack(codec.micro, tri, rate, codec.rate_bits)
+
+
+def decode_ids(scene, codec: IdCodec, ids, rate, cfg: VisBufferConfig):
+    """uint32 ids -> (int32 triangles, -1 empty; rate codes: read from the id where it travels
+    there, else ``rate`` as given)."""
+    if codec.micro is None:
+        return decode(scene, ids, cfg.layout), rate
+    tri, id_rate = micro_batch.unpack(codec.micro, ids, codec.rate_bits)
+    return tri, (id_rate if codec.rate_bits else rate)
+
+
+def init(scene, static, camera, cfg: VisBufferConfig):
+    """The state: the previous frame's camera (the first frame's own: no camera motion yet),
+    for the motion vectors of ``vrs = "motion"``."""
+    return camera
+
+
+@register("visbuffer", VisBufferConfig, init=init)
+def step(scene, static, prev_camera, camera, t, cfg: VisBufferConfig):
+    """Visibility buffer: packed 32-bit ids, shading from the id in loose tiles, VRS."""
+    return frame(scene, camera, t, prev_camera, cfg), camera
+
+
+def frame(scene, camera, t, prev_camera, cfg: VisBufferConfig) -> Frame:
+    """Frame ``t``; ``prev_camera`` (with the scene at t - 1) gives the motion vectors under
+    ``vrs = "motion"`` and is unused otherwise."""
     w, h = cfg.width, cfg.height
-    layout = cfg.layout
+    codec = id_codec(scene, cfg)
     with jax.named_scope("visibility"):
-        vis = visibility(scene, camera, cfg)
-        ids, id_overflow = encode(scene, vis.tri_id, layout)  # the buffer the raster pass writes
+        previous = (Previous(positions_at(scene, t - 1), prev_camera) if cfg.vrs == "motion"
+                    else None)
+        vis = visibility(scene, camera, cfg, previous=previous)
+        rate = pixel_rates(scene, camera, cfg, vis)  # the raster pass knows the rate
+        ids, id_overflow = encode_ids(scene, codec, vis.tri_id, rate, cfg)  # what it writes
     with jax.named_scope("classify"):
-        tri = decode(scene, ids, layout)  # the classification pass reads the ids
-        plan = plan_coarse_pixels(scene, camera, tri, cfg)
+        tri, rate = decode_ids(scene, codec, ids, rate, cfg)  # classification reads the ids
+        plan = plan_coarse_pixels(scene, tri, rate, cfg)
     with jax.named_scope("shade"):
         clip = clip_vertices(scene, camera, cfg)
         ids_flat = ids.reshape(-1)
 
         def fn(items, live_lanes):
-            t = decode(scene, ids_flat[items], layout)  # shading from the id
+            t, _ = decode_ids(scene, codec, ids_flat[items], None, cfg)  # shading from the id
             pts = points_at(scene, camera, clip, cfg, jnp.where(live_lanes, t, -1), items)
             return shade(pts, scene)
 
@@ -289,26 +266,44 @@ def frame(scene, camera, cfg: VisBufferConfig) -> Frame:
     with jax.named_scope("broadcast"):
         image = jnp.where(covered.reshape(-1)[:, None], out[plan.anchor], 0.0).reshape(h, w, 3)
         overflow = id_overflow + vis.counts["overflow"]
-        image = poison_on_overflow(image, overflow)
-    counts = _counts(vis, plan, work, covered, id_overflow, overflow, cfg)
+    image, blended = transparent_pass(scene, camera, image, vis.depth, cfg)
+    counts = merge_counts(_counts(vis, plan, work, covered, id_overflow, overflow, cfg), blended)
+    counts.update(shading_vertex_counts(scene, plan, tri, work, cfg))
+    image = poison_on_overflow(image, counts["overflow"])
     aux = {"ids": ids, "rate": plan.rate.reshape(h, w),
            "shade_count": plan.is_anchor.astype(jnp.int32).reshape(h, w)}
-    return Frame(image, counts, aux)
+    return Frame(image, counts, share_visibility(aux, vis, cfg))
+
+
+def shading_vertex_counts(scene, plan: ShadePlan, tri, work: dispatch.WorkList,
+                          cfg: VisBufferConfig) -> dict:
+    """The id pass transforms every vertex (positions only); shading fetches and transforms
+    a triangle's three vertices per shaded pixel, or per distinct triangle of each wave."""
+    if cfg.vertex_fetch == "pixel":
+        shaded = 3 * work.invocations
+    else:
+        tri_sorted = tri.reshape(-1)[plan.work.items]
+        shaded = 3 * wave_triangles(plan.run_starts, plan.live_sorted, tri_sorted,
+                                    cfg.wave_size, scene.faces.shape[0])
+    return vertex_counts(scene, full_passes=0, position_passes=1, shaded_vertices=shaded)
 
 
 def _counts(vis, plan: ShadePlan, work: dispatch.WorkList, covered, id_overflow, overflow,
             cfg) -> dict:
     inv = work.invocations
-    waves, util = count_waves(plan.wave_lanes, cfg.wave_size, inv)
+    waves = command_counts(plan.run_starts, plan.live_sorted, cfg.wave_size, inv, cfg.tiling)
     n_cov = jnp.sum(covered, dtype=jnp.int32)
     id_bytes = 4
     written = n_cov * (id_bytes + 4)  # id + depth
-    # The classification pass reads every id, shading its own.
+    # The classification pass reads every id and writes the commands; shading reads the
+    # commands and its own ids.
+    commands = waves["pixel_command_bytes"] + waves["wave_command_bytes"]
     read = cfg.width * cfg.height * id_bytes + inv * id_bytes
     return make_counts(
-        shade_invocations=inv, covered_pixels=n_cov, waves=waves, lane_utilization=util,
-        bytes_intermediate=written + read, id_overflow=id_overflow,
+        shade_invocations=inv, covered_pixels=n_cov, **waves,
+        bytes_intermediate=written + read + 2 * commands, id_overflow=id_overflow,
         overflow=overflow, alpha_invocations=vis.counts["alpha_invocations"])
 
 
 render = REGISTRY["visbuffer"].render  # the compiled, overflow-checked entry
+render_sequence = REGISTRY["visbuffer"].render_sequence

@@ -83,6 +83,20 @@ class Previous(NamedTuple):
     camera: Camera
 
 
+# The aux key under which a pipeline hands its visibility buffer to the temporal resolve.
+SHARED_VISIBILITY = "visibility"
+
+
+def share_visibility(aux: dict, vis: VisBuffer, cfg) -> dict:
+    """``aux`` with the frame's visibility buffer added when TAA resolves the frame
+    (``cfg.taa``) and the buffer is one sample per pixel: the resolve then reads the depth,
+    ids and barycentrics the pipeline rasterized instead of rasterizing the frame again. TAA
+    takes the entry out, so no program returns it."""
+    if not getattr(cfg, "taa", False) or vis.tri_id.ndim != 2:
+        return aux
+    return dict(aux, **{SHARED_VISIBILITY: vis})
+
+
 def visibility(scene: Scene, camera: Camera, cfg, sample_offsets=None, *,
                previous: Previous | None = None) -> VisBuffer:
     """The nearest surviving surface at each pixel (or sample): a VisBuffer of shape (H, W), or
@@ -109,13 +123,14 @@ def visibility(scene: Scene, camera: Camera, cfg, sample_offsets=None, *,
 def _nearest(scene: Scene, camera: Camera, cfg, sample_offsets) -> VisBuffer:
     offsets = sample_patterns.validate(sample_offsets or sample_patterns.CENTER)
     cull = bool(getattr(cfg, "cull_backfaces", False))
+    faces = opaque_faces(scene)  # transparent surfaces are the transparent pass's
     if not scene.effects.alpha_test:
-        vis = raster_visbuffer(clip_vertices(scene, camera, cfg), scene.faces, cfg,
+        vis = raster_visbuffer(clip_vertices(scene, camera, cfg), faces, cfg,
                                cull_backfaces=cull, sample_offsets=offsets)
         return VisBuffer(vis.tri_id, vis.depth, vis.bary, vis.dbary_dx, vis.dbary_dy,
                          dict(vis.counts, alpha_invocations=jnp.int32(0), overflow=jnp.int32(0)))
     clip = clip_vertices(scene, camera, cfg)
-    per = [_alpha_visibility(scene, camera, clip, cfg, off, cull) for off in offsets]
+    per = [_alpha_visibility(scene, camera, clip, faces, cfg, off, cull) for off in offsets]
     if len(per) == 1:
         return per[0]
     stack = lambda *a: jnp.stack(a)  # noqa: E731
@@ -131,10 +146,31 @@ def is_alpha_tested(scene: Scene, tri: Array) -> Array:
     return scene.materials.alpha_tested[scene.tri_material[jnp.maximum(tri, 0)]] & (tri >= 0)
 
 
-def _alpha_visibility(scene, camera, clip, cfg, offset, cull) -> VisBuffer:
+def is_transparent(scene: Scene, tri: Array) -> Array:
+    """bool[N]: the triangle's material blends (always False without the transparency effect)."""
+    if not scene.effects.transparency:
+        return jnp.zeros(tri.shape, bool)
+    return (scene.materials.blend[scene.tri_material[jnp.maximum(tri, 0)]] != 0) & (tri >= 0)
+
+
+def faces_where(scene: Scene, keep: Array) -> Array:
+    """The scene's faces with the triangles not kept made degenerate (all three corners vertex
+    0): they cover no pixel, and every triangle keeps its index, so ids stay the scene's."""
+    return jnp.where(keep[:, None], scene.faces, 0)
+
+
+def opaque_faces(scene: Scene) -> Array:
+    """The faces the opaque passes rasterize: all of them without transparency, else all but
+    the blended ones."""
+    if not scene.effects.transparency:
+        return scene.faces
+    return faces_where(scene, ~is_transparent(scene, jnp.arange(scene.num_triangles)))
+
+
+def _alpha_visibility(scene, camera, clip, faces, cfg, offset, cull) -> VisBuffer:
     w, h, cap = cfg.width, cfg.height, cfg.capacity
     n_pix = w * h
-    fr = raster_fragments(clip, scene.faces, cfg, cull_backfaces=cull, sample_offset=offset)
+    fr = raster_fragments(clip, faces, cfg, cull_backfaces=cull, sample_offset=offset)
     pix = jnp.where(fr.valid, fr.pixel, n_pix)
     tested = is_alpha_tested(scene, fr.tri) & fr.valid
     inf = float("inf")

@@ -1,13 +1,15 @@
 """Waves: how shading lanes are packed into SIMD waves of ``wave_size`` lanes, counted one way
 for every pipeline.
 
-Each pipeline groups its lanes the way its hardware counterpart launches them: forward packs the
-2x2 quads of one material into waves; deferred and checkerboard run a full-screen compute pass
-over 8x8 tiles, each split into waves of consecutive rows; the visibility buffer packs the coarse
-pixels of one (material, rate, 8x8 tile) into waves; object-space shading launches whole 8x8
-shadel chunks; DACS hands each warp a run of a level's pixels. A group's lanes never share a wave
-with another group's, so the waves are the sum over groups of ceil(lanes / wave_size), and the
-lane utilisation is the invocations over the lanes those waves hold.
+Each pipeline groups its lanes the way its hardware counterpart launches them: forward packs
+the 2x2 quads of one draw into waves in rasterization order (``draw_waves``); deferred and
+checkerboard run a full-screen compute pass over 8x8 tiles, each split into waves of
+consecutive rows; the visibility buffer packs the coarse pixels of one batch group in a
+128x128 tile into waves (``loose_tiles``), or those of one (material, rate, 8x8 tile);
+object-space shading launches whole 8x8 shadel chunks; DACS hands each warp a run of a level's
+pixels. A group's lanes never share a wave with another group's, so the waves are the sum over
+groups of ceil(lanes / wave_size), and the lane utilisation is the invocations over the lanes
+those waves hold.
 """
 
 from __future__ import annotations

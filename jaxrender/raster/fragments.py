@@ -90,6 +90,16 @@ def fragments_jit(
     traversal="auto",
 ) -> Fragments:
     """The jitted core of ``fragments`` (no input checks); ``traversal`` as ``raster.traverse``."""
+    return collect_fragments(clip, faces, width, height, capacity, cull_backfaces,
+                             jnp.asarray(offset, jnp.int32), work_capacity, clip_capacity,
+                             traversal)
+
+
+def collect_fragments(clip, faces, width: int, height: int, capacity: int, cull_backfaces: bool,
+                      offset: Array, work_capacity: int, clip_capacity: int,
+                      traversal: str = "auto") -> Fragments:
+    """``fragments_jit`` for use inside a program, at a fixed-point sample ``offset`` int32[2]
+    that may be traced (the reference's per-sample loop)."""
     with jax.enable_x64(True):
         def append(st, c):
             pix, tri, depth, n = st
@@ -107,7 +117,7 @@ def fragments_jit(
             jnp.int64(0),
         )
         (pix, tri, depth, n), _ = traverse(
-            clip, faces, width, height, cull_backfaces, jnp.asarray(offset, jnp.int64),
+            clip, faces, width, height, cull_backfaces, offset.astype(jnp.int64),
             work_capacity, clip_capacity, init, append, traversal,
         )
         valid = jnp.arange(capacity) < n

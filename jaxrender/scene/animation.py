@@ -11,6 +11,9 @@ along the wind so that neighbouring plants lag each other, as shipped foliage sh
 for a static scene, which then compiles none of it). ``pose(scene, t)`` is the scene at frame
 ``t``: the positions, normals and tangents recomputed from the rest pose, so ``pose`` of a posed
 scene at another frame is that frame's pose (the motion vectors pose frame t-1 this way).
+Swaying bends a surface, so its normals and tangents follow the deformation's Jacobian
+``J = R + u g^T`` (``u`` the wind direction, ``g`` the gradient of the sway displacement's size
+over the rest position): tangents by ``J``, normals by its cofactor (``J^-T`` up to scale).
 """
 
 from __future__ import annotations
@@ -80,8 +83,11 @@ class Animation:
     float32[V, 4]; spin_axis float32[O, 3] (unit); spin_rate float32[O] (rad/s); pivot
     float32[O, 3]; velocity float32[O, 3]; orbit_center, orbit_axis float32[O, 3]; orbit_rate
     float32[O] (rad/s); sway_offset float32[V, 3] (peak displacement); sway_phase float32[V]
-    (rad); sway_omega float32[V] (rad/s). Static: fps, and which kinds are present (a scene
-    that only sways compiles no rigid transform, and the other way round)."""
+    (rad); sway_omega float32[V] (rad/s); sway_direction float32[V, 3] (unit); sway_slope
+    float32[V] (the peak displacement's derivative along y); sway_wave float32[V] (peak
+    displacement x wavenumber: its phase's derivative along the wind). Static: fps, and which
+    kinds are present (a scene that only sways compiles no rigid transform, and the other way
+    round)."""
 
     vertex_object: Array
     rest_positions: Array
@@ -97,6 +103,9 @@ class Animation:
     sway_offset: Array
     sway_phase: Array
     sway_omega: Array
+    sway_direction: Array
+    sway_slope: Array
+    sway_wave: Array
     fps: float = static_field(default=DEFAULT_FPS)
     rigid: bool = static_field(default=False)
     sways: bool = static_field(default=False)
@@ -119,22 +128,19 @@ def build_animation(motions: list, positions: np.ndarray, normals: np.ndarray,
     sways = any(m.sways for m in motions)
     if not (rigid or sways):
         return None
-    n_obj = len(motions)
     pos = np.asarray(positions, np.float64)
     obj = np.asarray(vertex_object, np.int64)
-    pivot = np.zeros((n_obj, 3))
-    base = np.zeros(n_obj)
-    for o, m in enumerate(motions):
-        p = pos[obj == o]
-        lo, hi = (p.min(0), p.max(0)) if len(p) else (np.zeros(3), np.zeros(3))
-        pivot[o] = 0.5 * (lo + hi) if m.pivot is None else np.asarray(m.pivot, np.float64)
-        base[o] = lo[1] if m.sway_base is None else float(m.sway_base)
+    pivot, weight, height = _pivots_and_sway(motions, pos, obj)
     per_v = lambda f: np.asarray([f(m) for m in motions], np.float64)[obj]  # noqa: E731
     direction = np.stack([_unit(m.sway_direction) for m in motions])[obj]
-    height = np.maximum(pos[:, 1] - base[obj], 0.0) / per_v(lambda m: m.sway_height)
-    weight = per_v(lambda m: m.sway_amplitude) * height ** per_v(lambda m: m.sway_exponent)
+    amplitude, exponent = per_v(lambda m: m.sway_amplitude), per_v(lambda m: m.sway_exponent)
+    # d weight / dy: zero below the base (the height is clamped there) and for exponent 0.
+    lifted = (height > 0.0) & (exponent > 0.0)
+    slope = np.where(lifted, amplitude * exponent * np.where(lifted, height, 1.0) ** (
+        exponent - 1.0) / per_v(lambda m: m.sway_height), 0.0)
     along = np.sum(pos * direction, axis=-1)
-    phase = 2 * np.pi * along / per_v(lambda m: m.sway_wavelength)
+    wavenumber = 2 * np.pi / per_v(lambda m: m.sway_wavelength)
+    phase = wavenumber * along
     f32 = lambda a: jnp.asarray(np.asarray(a, np.float32))  # noqa: E731
     rad = np.deg2rad
     return Animation(
@@ -148,7 +154,48 @@ def build_animation(motions: list, positions: np.ndarray, normals: np.ndarray,
         orbit_rate=f32([rad(m.orbit_deg_per_s) for m in motions]),
         sway_offset=f32(weight[:, None] * direction), sway_phase=f32(phase),
         sway_omega=f32(2 * np.pi * per_v(lambda m: m.sway_frequency_hz)),
+        sway_direction=f32(direction), sway_slope=f32(slope), sway_wave=f32(weight * wavenumber),
         fps=float(fps), rigid=rigid, sways=sways)
+
+
+def _pivots_and_sway(motions: list, pos: np.ndarray, obj: np.ndarray):
+    """(pivot [O, 3], peak sway displacement [V], height over the sway base in sway_height
+    units [V]) of ObjectMotions ``motions`` over rest positions ``pos``."""
+    pivot = np.zeros((len(motions), 3))
+    base = np.zeros(len(motions))
+    for o, m in enumerate(motions):
+        p = pos[obj == o]
+        lo, hi = (p.min(0), p.max(0)) if len(p) else (np.zeros(3), np.zeros(3))
+        pivot[o] = 0.5 * (lo + hi) if m.pivot is None else np.asarray(m.pivot, np.float64)
+        base[o] = lo[1] if m.sway_base is None else float(m.sway_base)
+    per_v = lambda f: np.asarray([f(m) for m in motions], np.float64)[obj]  # noqa: E731
+    height = np.maximum(pos[:, 1] - base[obj], 0.0) / per_v(lambda m: m.sway_height)
+    weight = per_v(lambda m: m.sway_amplitude) * height ** per_v(lambda m: m.sway_exponent)
+    return pivot, weight, height
+
+
+def reach(anim: Animation) -> np.ndarray:
+    """float64[2, 3]: a box that holds every vertex of ``anim`` at every time under spin, orbit
+    and sway (the rest pose included), for the shadow map's light box. Conservative: a
+    spinning or orbiting object stays in the sphere about its orbit centre (or its pivot) of
+    radius the pivot's distance to it plus the object's farthest vertex from the pivot and its
+    largest sway, and a swaying vertex within its peak displacement. A constant velocity has no
+    bound: its object is boxed at rest, so its shadows end where it leaves the box."""
+    pos = np.asarray(anim.rest_positions, np.float64)
+    obj = np.asarray(anim.vertex_object)
+    pivot, centre = np.asarray(anim.pivot, np.float64), np.asarray(anim.orbit_center, np.float64)
+    sway = np.linalg.norm(np.asarray(anim.sway_offset, np.float64), axis=-1)
+    spins, orbits = np.asarray(anim.spin_rate) != 0, np.asarray(anim.orbit_rate) != 0
+    lo, hi = (pos - sway[:, None]).min(0), (pos + sway[:, None]).max(0)
+    for o in np.flatnonzero(spins | orbits):
+        mine = obj == o
+        if not mine.any():
+            continue
+        about = centre[o] if orbits[o] else pivot[o]
+        radius = (np.linalg.norm(pivot[o] - about)
+                  + np.linalg.norm(pos[mine] - pivot[o], axis=-1).max() + sway[mine].max())
+        lo, hi = np.minimum(lo, about - radius), np.maximum(hi, about + radius)
+    return np.stack([lo, hi])
 
 
 def rotation_matrices(axis: Array, angle: Array) -> Array:
@@ -171,6 +218,7 @@ def pose_arrays(anim: Animation, t) -> tuple[Array, Array, Array]:
     """(positions, normals, tangents) at frame ``t`` (a traced or Python number)."""
     seconds = jnp.asarray(t, jnp.float32) / jnp.float32(anim.fps)
     pos, nrm, tan = anim.rest_positions, anim.rest_normals, anim.rest_tangents
+    r = None
     if anim.rigid:
         spin = rotation_matrices(anim.spin_axis, anim.spin_rate * seconds)
         orbit = rotation_matrices(anim.orbit_axis, anim.orbit_rate * seconds)
@@ -183,9 +231,39 @@ def pose_arrays(anim: Animation, t) -> tuple[Array, Array, Array]:
         nrm = _apply(r, nrm)
         tan = jnp.concatenate([_apply(r, tan[:, :3]), tan[:, 3:]], axis=-1)
     if anim.sways:
-        wave = jnp.sin(anim.sway_omega * seconds + anim.sway_phase)
-        pos = pos + anim.sway_offset * wave[:, None]
+        phase = anim.sway_omega * seconds + anim.sway_phase
+        pos = pos + anim.sway_offset * jnp.sin(phase)[:, None]
+        nrm, tan = _swayed_frames(anim, phase, r)
     return pos, nrm, tan
+
+
+def _dot(a: Array, b: Array) -> Array:
+    return jnp.sum(a * b, axis=-1, keepdims=True)
+
+
+def _normalized(v: Array) -> Array:
+    return v / jnp.maximum(jnp.sqrt(_dot(v, v)), 1e-20)
+
+
+def _swayed_frames(anim: Animation, phase: Array, r: Array | None) -> tuple[Array, Array]:
+    """Normals and tangents of the swayed (and, with ``r`` [V, 3, 3], rotated) surface.
+
+    The position is ``x(p) = R (p - pivot) + moved + u w(p) sin(phase(p))``, so its Jacobian
+    is ``J = R + u g^T`` with ``g = sin(phase) w'(p) + cos(phase) w(p) phase'(p)``; with
+    ``u' = R^T u``, ``J = R (I + u' g^T)``: tangents go to ``R (t + u' (g . t))`` and normals,
+    by the cofactor of ``I + u' g^T``, to ``R ((1 + g . u') n - g (u' . n))``."""
+    up = jnp.asarray([[0.0, 1.0, 0.0]], jnp.float32)
+    u = anim.sway_direction
+    g = ((jnp.sin(phase) * anim.sway_slope)[:, None] * up
+         + (jnp.cos(phase) * anim.sway_wave)[:, None] * u)
+    n0, t0 = anim.rest_normals, anim.rest_tangents[:, :3]
+    u_rest = u if r is None else _apply(jnp.swapaxes(r, -1, -2), u)
+    nrm = (1.0 + _dot(g, u_rest)) * n0 - g * _dot(u_rest, n0)
+    tan = t0 + u_rest * _dot(g, t0)
+    if r is not None:
+        nrm, tan = _apply(r, nrm), _apply(r, tan)
+    return (_normalized(nrm),
+            jnp.concatenate([_normalized(tan), anim.rest_tangents[:, 3:]], axis=-1))
 
 
 def pose(scene, t):
@@ -204,4 +282,4 @@ def positions_at(scene, t) -> Array:
 
 
 __all__ = ["Animation", "DEFAULT_FPS", "MOTION_KEYS", "ObjectMotion", "build_animation",
-           "pose", "pose_arrays", "positions_at", "rotation_matrices"]
+           "pose", "pose_arrays", "positions_at", "reach", "rotation_matrices"]

@@ -13,6 +13,7 @@ import numpy as np
 
 from jaxrender.scene.animation import ObjectMotion
 from jaxrender.scene.camera import look_at
+from jaxrender.scene.glass import glass
 from jaxrender.scene.lights import make_lights
 from jaxrender.scene.materials import Material
 from jaxrender.scene.mesh import MeshPart, box, grid_plane, trs_matrix, uv_sphere
@@ -143,6 +144,44 @@ def foliage_wind(*, n_cards: int = 200, card_size: float = 0.3, seed: int = 0,
                                description=foliage_wind.__doc__.splitlines()[0])
 
 
+def grass(*, n_blades: int = 2000, segments: int = 4, blade_height: float = 0.6,
+          blade_width: float = 0.04, patch: float = 4.0, seed: int = 0) -> Scene:
+    """The foliage's ground and view under dense tall grass (many thin, tiny triangles).
+
+    Each blade is a tapering vertical strip of ``segments`` quads (2 ``segments`` triangles),
+    bent and turned at random, one object each: the blades are instances of one mesh (one
+    instanced batch of the visibility buffer's micro batches). The talk's tall-grass case, at
+    1080p: ``n_blades = 30000`` (240k triangles)."""
+    rng = np.random.default_rng(seed)
+    k = int(segments)
+    t = np.linspace(0.0, 1.0, k + 1)
+    half = 0.5 * blade_width * (1.0 - 0.85 * t)  # tapering towards the tip
+    local = np.stack([np.concatenate([-half, half]), np.tile(t, 2) * blade_height,
+                      np.zeros(2 * (k + 1))], 1)  # left column then right column
+    uvs = np.stack([np.repeat([0.0, 1.0], k + 1), np.tile(t, 2)], 1)
+    i = np.arange(k)
+    faces = np.concatenate([np.stack([i, k + 1 + i, i + 1], 1),
+                            np.stack([i + 1, k + 1 + i, k + 2 + i], 1)])
+    parts = [grid_plane((6, 6), material=1)]
+    for _ in range(int(n_blades)):
+        bend = rng.uniform(0.0, 0.35)
+        pos = local.copy()
+        pos[:, 2] = bend * blade_height * np.tile(t, 2) ** 2  # leaning forward towards the tip
+        height = rng.uniform(0.6, 1.0)
+        m = trs_matrix(translate=(*rng.uniform(-patch / 2, patch / 2, 1), 0.0,
+                                  *rng.uniform(-patch / 2, patch / 2, 1)),
+                       rotate_deg=(0.0, rng.uniform(0, 360), 0.0), scale=(1.0, height, 1.0))
+        nrm = np.tile([0.0, 0.0, 1.0], (len(pos), 1))
+        tan = np.tile([1.0, 0.0, 0.0, 1.0], (len(pos), 1))
+        parts.append(MeshPart(pos, faces, normals=nrm, uvs=uvs, tangents=tan,
+                              material=0).transformed(m))
+    mats = [Material("grass", albedo=(0.18, 0.42, 0.1)),
+            Material("ground", albedo=(0.35, 0.25, 0.15))]
+    cam = look_at((0, 1.5, 5), (0, 1.2, 0), fov_y_deg=50)
+    return build_scene(parts, mats, [], make_lights([_SUN], ambient=0.1), cam,
+                       name="grass", description=grass.__doc__.splitlines()[0])
+
+
 def thin(*, n_wires: int = 24, fence_bars: int = 40, width: float = 0.004) -> Scene:
     """Wires and a fence narrower than a pixel in front of a wall (geometric aliasing)."""
     parts = [grid_plane((12, 6), material=1).transformed(trs_matrix((0, 3, -3), (90, 0, 0)))]
@@ -261,7 +300,7 @@ def many_small(*, n_triangles: int = 20_000, size: float = 4.0, point_lights: in
 
 
 BUILTINS = {f.__name__: f for f in (stripes, spheres, foliage, thin, terrain, sliver, room, many_small,
-                                     foliage_wind, spheres_spin)}
+                                     foliage_wind, spheres_spin, grass, glass)}
 
 
 def list_builtin_scenes() -> list[tuple[str, str]]:

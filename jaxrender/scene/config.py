@@ -18,6 +18,9 @@ name = "floor"
 albedo = [0.8, 0.8, 0.8]           # also: specular, shininess, roughness, brdf, texture (image
 texture = "floor.png"              # file), normal_map (image file), alpha, alpha_tested,
                                    # alpha_cutoff, emissive, procedural, stripe_resolution
+blend = "over"                     # optional: "opaque" (default), "over" or "additive": a
+opacity = 0.5                      # transparent surface of opacity in [0, 1], times the
+opacity_source = "constant"        # texture's alpha with "texture_alpha" (needs an alpha)
 [[meshes]]                         # file = "x.obj|.ply|.glb|.gltf" or primitive = "plane|box|sphere"
 primitive = "plane"
 size = [10, 10]                    # plane [w, d], box [w, h, d], sphere radius
@@ -41,11 +44,16 @@ irradiance = 2.0                   # scalar or RGB
 [effects]                          # optional overrides of the derived Effects flags
 shader_cost = 4
 ```
+A file with ``base = "<built-in scene>"`` (say "room") adds its materials and meshes to that
+scene instead, under its lights and camera (a ``[camera]`` table overrides it; ``lights``,
+``shadows``, ``fps`` and ``texture_resolution`` are the base's): glass panes or particles in
+any still built-in scene (``scene.compose``).
 Relative paths are relative to the TOML file.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 from pathlib import Path
 
@@ -53,123 +61,16 @@ import numpy as np
 
 from jaxrender.scene.animation import DEFAULT_FPS, ObjectMotion
 from jaxrender.scene.camera import look_at
-from jaxrender.scene.effects import BRDF_NAMES, EFFECT_FIELDS, PROCEDURAL_NAMES
+from jaxrender.scene.config_schema import (CAMERA, EFFECTS, LIGHT, LIGHT_KEYS, MATERIAL, MESH,
+                                           MOTION, TOP, SceneConfigError, array_of_tables,
+                                           check_table, existing_file, rgb)
+from jaxrender.scene.effects import BRDF_NAMES
 from jaxrender.scene.lights import make_lights
 from jaxrender.scene.materials import Material
 from jaxrender.scene.mesh import box, grid_plane, trs_matrix, uv_sphere
 from jaxrender.scene.mesh_io import load_mesh_file
-from jaxrender.scene.scene import Scene, build_scene
+from jaxrender.scene.scene import Scene, build_scene, texture_has_alpha
 from jaxrender.scene.textures import as_rgba
-
-
-class SceneConfigError(ValueError):
-    """A malformed scene file; the message names the file and the key."""
-
-    def __init__(self, path, key, problem):
-        self.path, self.key = str(path), key
-        super().__init__(f"{path}: key {key!r}: {problem}")
-
-
-# ---------------------------------------------------------------- value checkers
-
-def _num(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
-
-
-def _vec(n):
-    def check(v):
-        return isinstance(v, list) and len(v) == n and all(_num(x) for x in v)
-    check.__doc__ = f"a list of {n} numbers"
-    return check
-
-
-def _num_or_vec(n):
-    vec = _vec(n)
-
-    def check(v):
-        return _num(v) or vec(v)
-    check.__doc__ = f"a number or a list of {n} numbers"
-    return check
-
-
-def _of(t, doc):
-    def check(v):
-        return isinstance(v, t) and not (t in (int, (int, float)) and isinstance(v, bool))
-    check.__doc__ = doc
-    return check
-
-
-def _choice(names):
-    def check(v):
-        return isinstance(v, str) and v in names
-    check.__doc__ = f"one of {sorted(names)}"
-    return check
-
-
-NUM, INT, STR, BOOL = (_of((int, float), "a number"), _of(int, "an integer"),
-                       _of(str, "a string"), _of(bool, "a boolean"))
-VEC3 = _vec(3)
-
-TOP = {"name": STR, "description": STR, "texture_resolution": INT, "shadows": BOOL, "fps": NUM,
-       "camera": None, "materials": None, "meshes": None, "lights": None, "effects": None}
-CAMERA = {"eye": VEC3, "target": VEC3, "up": VEC3, "fov_y_deg": NUM, "near": NUM, "far": NUM}
-MATERIAL = {"name": STR, "albedo": VEC3, "specular": VEC3, "shininess": NUM, "roughness": NUM,
-            "brdf": _choice(BRDF_NAMES), "texture": STR, "normal_map": STR, "alpha": NUM,
-            "alpha_tested": BOOL, "alpha_cutoff": NUM, "emissive": VEC3,
-            "procedural": _choice(PROCEDURAL_NAMES), "stripe_resolution": NUM}
-def _size(v):
-    return _num(v) or (isinstance(v, list) and len(v) in (2, 3) and all(_num(x) for x in v))
-
-
-_size.__doc__ = "a number or a list of 2 or 3 numbers"
-MESH = {"file": STR, "primitive": _choice({"plane", "box", "sphere"}), "size": _size,
-        "subdivisions": INT, "uv_scale": _vec(2), "material": STR, "translate": VEC3,
-        "rotate_deg": VEC3, "scale": _num_or_vec(3), "velocity": VEC3, "motion": None}
-MOTION = {"spin_axis": VEC3, "spin_deg_per_s": NUM, "pivot": VEC3, "velocity": VEC3,
-          "orbit_center": VEC3, "orbit_axis": VEC3, "orbit_deg_per_s": NUM,
-          "sway_amplitude": NUM, "sway_direction": VEC3, "sway_frequency_hz": NUM,
-          "sway_wavelength": NUM, "sway_height": NUM, "sway_exponent": NUM, "sway_base": NUM}
-LIGHT = {"type": _choice({"directional", "point", "ambient"}), "direction": VEC3,
-         "irradiance": _num_or_vec(3), "position": VEC3, "intensity": _num_or_vec(3),
-         "radiance": _num_or_vec(3)}
-LIGHT_KEYS = {"directional": ("direction", "irradiance"), "point": ("position", "intensity"),
-              "ambient": ("radiance",)}
-EFFECTS = {k: (BOOL if t in (bool, "bool") else INT if t in (int, "int") else
-               NUM if t in (float, "float") else _of(list, "a list of BRDF names"))
-           for k, t in EFFECT_FIELDS.items()}
-
-
-def _check_table(path, prefix, table, schema, required=()):
-    if not isinstance(table, dict):
-        raise SceneConfigError(path, prefix, "must be a table")
-    for key, value in table.items():
-        full = f"{prefix}.{key}" if prefix else key
-        if key not in schema:
-            raise SceneConfigError(path, full, f"unknown key; allowed: {', '.join(sorted(schema))}")
-        check = schema[key]
-        if check is not None and not check(value):
-            raise SceneConfigError(path, full, f"must be {check.__doc__}, got {value!r}")
-    for key in required:
-        if key not in table:
-            raise SceneConfigError(path, f"{prefix}.{key}" if prefix else key, "missing required key")
-
-
-def _array_of_tables(path, data, key):
-    items = data.get(key, [])
-    if not isinstance(items, list) or not all(isinstance(t, dict) for t in items):
-        raise SceneConfigError(path, key, "must be an array of tables ([[%s]])" % key)
-    return items
-
-
-def _file(path, key, name):
-    f = (Path(path).parent / name).resolve()
-    if not f.is_file():
-        raise SceneConfigError(path, key, f"file {name!r} not found (looked for {f})")
-    return f
-
-
-def _rgb(v):
-    return tuple(float(x) for x in np.broadcast_to(np.asarray(v, np.float64), (3,)))
 
 
 def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
@@ -177,7 +78,9 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
     flags. Raises SceneConfigError naming the file and the key."""
     path = Path(path)
     data = _read(path)
-    _check_table(path, "", data, TOP, required=("camera", "meshes"))
+    if "base" in data:
+        return _onto_base(path, data, effects)
+    check_table(path, "", data, TOP, required=("camera", "meshes"))
     camera = _camera(path, data)
     materials, textures, by_name = _materials(path, data)
     parts = _meshes(path, data, materials, textures, by_name)
@@ -199,6 +102,34 @@ def load_scene_toml(path: str | Path, effects: dict | None = None) -> Scene:
         raise SceneConfigError(path, "<scene>", str(e)) from None
 
 
+def _onto_base(path: Path, data: dict, effects: dict | None) -> Scene:
+    """``base = "<built-in scene>"``: the file's meshes added to that scene (its lights; its
+    camera unless the file gives one). See ``scene.compose``."""
+    from jaxrender.scene.builtin import BUILTINS, builtin_scene
+    from jaxrender.scene.compose import add_objects
+
+    check_table(path, "", data, TOP, required=("meshes",))
+    if data["base"] not in BUILTINS:
+        raise SceneConfigError(path, "base", f"{data['base']!r} is not a built-in scene "
+                               f"({', '.join(BUILTINS)})")
+    for key in ("lights", "shadows", "fps", "texture_resolution"):
+        if key in data:
+            raise SceneConfigError(path, key, "is the base scene's (base = "
+                                   f"{data['base']!r}); remove it")
+    materials, textures, by_name = _materials(path, data)
+    parts = _meshes(path, data, materials, textures, by_name)
+    try:
+        scene = add_objects(builtin_scene(data["base"]), parts, materials, textures)
+        eff = dict(_effects(path, data), **(effects or {}))
+        if eff:
+            scene = dataclasses.replace(scene, effects=scene.effects.replace(**eff))
+    except (ValueError, KeyError) as e:
+        raise SceneConfigError(path, "<scene>", str(e)) from None
+    camera = _camera(path, data) if "camera" in data else scene.camera
+    return dataclasses.replace(scene, camera=camera, name=data.get("name", path.stem),
+                               description=data.get("description", scene.description))
+
+
 def _read(path: Path) -> dict:
     try:
         return tomllib.loads(path.read_text())
@@ -209,7 +140,7 @@ def _read(path: Path) -> dict:
 
 
 def _camera(path: Path, data: dict):
-    _check_table(path, "camera", data["camera"], CAMERA, required=("eye", "target"))
+    check_table(path, "camera", data["camera"], CAMERA, required=("eye", "target"))
     cam_kw = {k: data["camera"][k] for k in ("up", "fov_y_deg", "near", "far") if k in data["camera"]}
     try:
         return look_at(data["camera"]["eye"], data["camera"]["target"], **cam_kw)
@@ -224,7 +155,7 @@ def _materials(path: Path, data: dict) -> tuple[list, list, dict]:
     image_index: dict[tuple, int] = {}
 
     def image(key, name, srgb):
-        f = _file(path, key, name)
+        f = existing_file(path, key, name)
         if (f, srgb) not in image_index:
             import imageio.v3 as iio
 
@@ -236,34 +167,56 @@ def _materials(path: Path, data: dict) -> tuple[list, list, dict]:
             textures.append(as_rgba(img, srgb=srgb))
         return image_index[(f, srgb)]
 
-    for i, m in enumerate(_array_of_tables(path, data, "materials")):
+    for i, m in enumerate(array_of_tables(path, data, "materials")):
         pre = f"materials[{i}]"
-        _check_table(path, pre, m, MATERIAL, required=("name",))
+        check_table(path, pre, m, MATERIAL, required=("name",))
         if m["name"] in by_name:
             raise SceneConfigError(path, f"{pre}.name", f"duplicate material name {m['name']!r}")
         kw = dict(m)
         for k in ("albedo", "specular", "emissive"):
             if k in kw:
-                kw[k] = _rgb(kw[k])
+                kw[k] = rgb(kw[k])
         if "texture" in kw:
             kw["texture"] = image(f"{pre}.texture", kw["texture"], srgb=True)
         if "normal_map" in kw:
             kw["normal_map"] = image(f"{pre}.normal_map", kw["normal_map"], srgb=False)
+        _check_opacity(path, pre, kw, textures)
         by_name[m["name"]] = len(materials)
-        materials.append(Material(**kw))
+        try:
+            materials.append(Material(**kw))
+        except ValueError as e:
+            raise SceneConfigError(path, pre, str(e)) from None
     return materials, textures, by_name
+
+
+def _check_opacity(path: Path, pre: str, kw: dict, textures: list) -> None:
+    """The transparency keys of one material, each problem named by its key."""
+    if "opacity" in kw and not 0.0 <= float(kw["opacity"]) <= 1.0:
+        raise SceneConfigError(path, f"{pre}.opacity", f"must be in [0, 1], got {kw['opacity']}")
+    if kw.get("blend", "opaque") == "opaque":
+        for key in ("opacity", "opacity_source"):
+            if key in kw:
+                raise SceneConfigError(path, f"{pre}.{key}", "has no effect without blend = "
+                                       "\"over\" or \"additive\"")
+    if kw.get("opacity_source") == "texture_alpha":
+        if "texture" not in kw:
+            raise SceneConfigError(path, f"{pre}.opacity_source", "\"texture_alpha\" needs a "
+                                   "texture")
+        if not texture_has_alpha(textures[kw["texture"]]):
+            raise SceneConfigError(path, f"{pre}.opacity_source", "\"texture_alpha\" but the "
+                                   "texture has no alpha channel (every texel opaque)")
 
 
 def _meshes(path: Path, data: dict, materials: list, textures: list, by_name: dict) -> list:
     """The mesh parts, transformed; a file's own materials and textures are appended to
     ``materials`` and ``textures``."""
     parts = []
-    meshes = _array_of_tables(path, data, "meshes")
+    meshes = array_of_tables(path, data, "meshes")
     if not meshes:
         raise SceneConfigError(path, "meshes", "at least one [[meshes]] entry is required")
     for i, m in enumerate(meshes):
         pre = f"meshes[{i}]"
-        _check_table(path, pre, m, MESH)
+        check_table(path, pre, m, MESH)
         if ("file" in m) == ("primitive" in m):
             raise SceneConfigError(path, pre, "give exactly one of 'file' or 'primitive'")
         mat = None
@@ -273,7 +226,7 @@ def _meshes(path: Path, data: dict, materials: list, textures: list, by_name: di
                                        f"unknown material {m['material']!r}; known: {sorted(by_name)}")
             mat = by_name[m["material"]]
         if "file" in m:
-            f = _file(path, f"{pre}.file", m["file"])
+            f = existing_file(path, f"{pre}.file", m["file"])
             try:
                 got = load_mesh_file(f, materials, textures)
             except Exception as e:  # noqa: BLE001
@@ -312,7 +265,7 @@ MOTION_NEEDS = {"spin_axis": ("spin_deg_per_s",), "pivot": ("spin_deg_per_s", "o
 
 
 def _motion(path: Path, pre: str, table) -> ObjectMotion:
-    _check_table(path, pre, table, MOTION)
+    check_table(path, pre, table, MOTION)
     for key, needs in MOTION_NEEDS.items():
         if key in table and not any(table.get(n) for n in needs):
             raise SceneConfigError(path, f"{pre}.{key}", f"has no effect unless "
@@ -333,9 +286,9 @@ def _lights(path: Path, data: dict) -> tuple[list, list, np.ndarray]:
     """(directional (direction, irradiance) pairs, point (position, intensity) pairs, ambient
     radiance RGB)."""
     directional, point, ambient = [], [], np.zeros(3)
-    for i, lt in enumerate(_array_of_tables(path, data, "lights")):
+    for i, lt in enumerate(array_of_tables(path, data, "lights")):
         pre = f"lights[{i}]"
-        _check_table(path, pre, lt, LIGHT, required=("type",))
+        check_table(path, pre, lt, LIGHT, required=("type",))
         need = LIGHT_KEYS[lt["type"]]
         for k in lt:
             if k != "type" and k not in need:
@@ -351,13 +304,13 @@ def _lights(path: Path, data: dict) -> tuple[list, list, np.ndarray]:
         elif lt["type"] == "point":
             point.append((lt["position"], lt["intensity"]))
         else:
-            ambient = ambient + np.asarray(_rgb(lt["radiance"]))
+            ambient = ambient + np.asarray(rgb(lt["radiance"]))
     return directional, point, ambient
 
 
 def _effects(path: Path, data: dict) -> dict:
     eff = dict(data.get("effects", {}))
-    _check_table(path, "effects", eff, EFFECTS)
+    check_table(path, "effects", eff, EFFECTS)
     if "brdfs" in eff:
         bad = [b for b in eff["brdfs"] if b not in BRDF_NAMES]
         if bad:

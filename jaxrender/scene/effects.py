@@ -18,6 +18,14 @@ BRDF_NAMES = {"lambert": LAMBERT, "blinn_phong": BLINN_PHONG, "ggx": GGX}
 PROC_NONE, PROC_STRIPES = 0, 1
 PROCEDURAL_NAMES = {"none": PROC_NONE, "stripes": PROC_STRIPES}
 
+# Blend modes (``Materials.blend``): opaque surfaces write depth; "over" blends
+# a * c + (1 - a) * dst (Porter-Duff over), "additive" dst + a * c (glow, particles).
+BLEND_OPAQUE, BLEND_OVER, BLEND_ADDITIVE = 0, 1, 2
+BLEND_NAMES = {"opaque": BLEND_OPAQUE, "over": BLEND_OVER, "additive": BLEND_ADDITIVE}
+
+# Where a transparent material's opacity comes from (``Materials.opacity_texture``).
+OPACITY_SOURCES = ("constant", "texture_alpha")
+
 
 @dataclass(frozen=True)
 class Effects:
@@ -32,6 +40,9 @@ class Effects:
     motion:      the scene is animated (``scene.animation``): pipelines pose it at each frame
                  (``animation.pose``); off, no pose is computed. Follows the meshes' motion.
     procedural:  evaluate procedural shaders (the 1-texel stripe shader).
+    transparency: materials may blend (``Material.blend`` "over" or "additive"): pipelines run
+                 the transparent pass (``pipelines.transparency``); off, none of it is compiled
+                 and transparent triangles cannot exist (the flag follows the materials).
     brdfs:       sorted tuple of the BRDF kinds present; only these lobes are compiled.
     shader_cost: number of extra light layers evaluated (0 = the plain shader). Each layer
                  re-evaluates every light with the shading normal nudged by < 1e-3 rad and the
@@ -51,6 +62,7 @@ class Effects:
     emissive: bool = False
     motion: bool = False
     procedural: bool = False
+    transparency: bool = False
     brdfs: tuple = (LAMBERT,)
     shader_cost: int = 0
     aniso_taps: int = 1

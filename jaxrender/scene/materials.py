@@ -11,7 +11,9 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.scene.effects import BRDF_NAMES, PROCEDURAL_NAMES
+import math
+
+from jaxrender.scene.effects import BLEND_NAMES, BRDF_NAMES, OPACITY_SOURCES, PROCEDURAL_NAMES
 from jaxrender.types import Array, pytree_dataclass
 
 
@@ -25,6 +27,10 @@ class Material:
     alpha: base opacity multiplied with the texture's alpha; alpha_cutoff: the alpha test keeps
     a point when alpha >= alpha_cutoff (only for alpha_tested materials).
     procedural: "none" or "stripes" (IntTexCoord.x % 2 == 0 ? 1 : 0 at stripe_resolution).
+    blend: "opaque", "over" or "additive" (``effects.BLEND_NAMES``); a blended material is drawn
+    by the transparent pass with opacity ``opacity`` in [0, 1], times the texture's alpha when
+    opacity_source = "texture_alpha" (needs a texture with an alpha channel). An opaque
+    material refuses opacity settings (they would be ignored).
     """
 
     name: str = "default"
@@ -41,8 +47,16 @@ class Material:
     emissive: tuple = (0.0, 0.0, 0.0)
     procedural: str = "none"
     stripe_resolution: float = 256.0
+    blend: str = "opaque"
+    opacity: float = 1.0
+    opacity_source: str = "constant"
+
+    @property
+    def transparent(self) -> bool:
+        return self.blend != "opaque"
 
     def __post_init__(self):
+        self._check_blend()
         if self.brdf not in BRDF_NAMES:
             raise ValueError(f"material {self.name!r}: brdf {self.brdf!r} not in {sorted(BRDF_NAMES)}")
         if self.procedural not in PROCEDURAL_NAMES:
@@ -50,6 +64,28 @@ class Material:
                 f"material {self.name!r}: procedural {self.procedural!r} "
                 f"not in {sorted(PROCEDURAL_NAMES)}"
             )
+
+    def _check_blend(self):
+        """Each problem names the field, so a scene file can name its key."""
+        if self.blend not in BLEND_NAMES:
+            raise ValueError(f"material {self.name!r}: blend {self.blend!r} not in "
+                             f"{sorted(BLEND_NAMES)}")
+        if self.opacity_source not in OPACITY_SOURCES:
+            raise ValueError(f"material {self.name!r}: opacity_source {self.opacity_source!r} "
+                             f"not in {list(OPACITY_SOURCES)}")
+        op = float(self.opacity)
+        if not (math.isfinite(op) and 0.0 <= op <= 1.0):
+            raise ValueError(f"material {self.name!r}: opacity must be in [0, 1], got {op}")
+        if not self.transparent and (op != 1.0 or self.opacity_source != "constant"):
+            raise ValueError(f"material {self.name!r}: opacity and opacity_source have no "
+                             f"effect with blend = \"opaque\"; set blend to \"over\" or "
+                             f"\"additive\"")
+        if self.opacity_source == "texture_alpha" and self.texture < 0:
+            raise ValueError(f"material {self.name!r}: opacity_source = \"texture_alpha\" "
+                             f"needs a texture")
+        if self.transparent and self.alpha_tested:
+            raise ValueError(f"material {self.name!r}: a blended material cannot also be "
+                             f"alpha_tested (use opacity_source = \"texture_alpha\")")
 
 
 @pytree_dataclass
@@ -60,7 +96,8 @@ class Materials:
     roughness float32[M]; brdf int32[M] (effects.LAMBERT/BLINN_PHONG/GGX); texture int32[M]
     (-1 none); normal_map int32[M] (-1 none); alpha float32[M]; alpha_tested bool[M];
     alpha_cutoff float32[M]; emissive float32[M,3]; procedural int32[M];
-    stripe_resolution float32[M].
+    stripe_resolution float32[M]; blend int32[M] (effects.BLEND_*); opacity float32[M];
+    opacity_texture bool[M] (opacity times the texture's alpha).
     """
 
     albedo: Array
@@ -76,6 +113,9 @@ class Materials:
     emissive: Array
     procedural: Array
     stripe_resolution: Array
+    blend: Array
+    opacity: Array
+    opacity_texture: Array
 
     @property
     def count(self) -> int:
@@ -101,4 +141,8 @@ def pack_materials(materials: list[Material]) -> Materials:
         emissive=f32("emissive"),
         procedural=i32([PROCEDURAL_NAMES[m.procedural] for m in materials]),
         stripe_resolution=f32("stripe_resolution"),
+        blend=i32([BLEND_NAMES[m.blend] for m in materials]),
+        opacity=f32("opacity"),
+        opacity_texture=jnp.asarray(np.array(
+            [m.opacity_source == "texture_alpha" for m in materials], bool)),
     )

@@ -8,7 +8,7 @@ import dataclasses
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.scene.animation import DEFAULT_FPS, Animation, build_animation
+from jaxrender.scene.animation import DEFAULT_FPS, Animation, build_animation, reach
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.effects import BRDF_NAMES, LAMBERT, Effects
 from jaxrender.scene.lights import Lights
@@ -38,8 +38,9 @@ class Scene:
     """positions float32[V,3] world; normals float32[V,3] (unit or 0); uvs float32[V,2];
     tangents float32[V,4]; velocity float32[V,3] declared world displacement per frame (VRS by speed);
     faces int32[T,3]; tri_material int32[T]; tri_object int32[T] (mesh/instance id);
-    bounds float32[2,3] (min, max corner); materials; textures; lights; camera (the default
-    camera); shadow (ShadowMap or None; filled by ``shading.with_shadow_map``);
+    bounds float32[2,3] (min, max corner; of every pose of a moving scene,
+    ``animation.reach``); materials; textures; lights; camera (the default camera); shadow
+    (ShadowMap or None; filled by ``shading.with_shadow_map``);
     animation (``scene.animation.Animation``, or None for a scene that does not move; the
     arrays above are its rest pose, ``animation.pose(scene, t)`` the scene at frame t);
     effects (static); name, description (static)."""
@@ -83,6 +84,7 @@ def derive_effects(materials: list[Material], animated: bool, shadows: bool) -> 
         emissive=any(max(m.emissive) > 0 for m in materials),
         motion=animated,
         procedural=any(m.procedural != "none" for m in materials),
+        transparency=any(m.transparent for m in materials),
         brdfs=tuple(sorted({BRDF_NAMES[m.brdf] for m in materials} | {LAMBERT})),
     )
 
@@ -113,6 +115,7 @@ def build_scene(parts: list[MeshPart], materials: list[Material], textures: list
             if getattr(m, key) >= len(textures):
                 raise ValueError(f"scene {name!r}: material {m.name!r} {key} index "
                                  f"{getattr(m, key)} out of range ({len(textures)} textures)")
+    check_opacity_textures(materials, textures, name)
     tri_obj = np.concatenate([np.full(len(p.faces), i) for i, p in enumerate(parts)])
     cat = lambda k: np.concatenate([getattr(p, k) for p in parts], 0)  # noqa: E731
     vel = np.concatenate([np.broadcast_to(np.zeros(3) if p.velocity is None else p.velocity,
@@ -135,10 +138,17 @@ def build_scene(parts: list[MeshPart], materials: list[Material], textures: list
         raise ValueError(f"scene {name!r}: effects.motion={eff.motion} but the scene "
                          f"{'moves' if anim is not None else 'has no animation'}; the flag "
                          f"follows the meshes' motion")
+    if eff.transparency != default.transparency:
+        raise ValueError(f"scene {name!r}: effects.transparency={eff.transparency} but "
+                         f"{'no' if default.transparency else 'a'} material blends; the flag "
+                         f"follows the materials' blend modes")
     f32 = lambda a: jnp.asarray(np.asarray(a, np.float32))  # noqa: E731
     i32 = lambda a: jnp.asarray(np.asarray(a, np.int32))  # noqa: E731
-    lo = pos.min(0) if len(pos) else np.zeros(3)
-    hi = pos.max(0) if len(pos) else np.zeros(3)
+    if anim is None:
+        lo = pos.min(0) if len(pos) else np.zeros(3)
+        hi = pos.max(0) if len(pos) else np.zeros(3)
+    else:  # every pose inside, so that the shadow map's light box holds the moving scene
+        lo, hi = reach(anim)
     return Scene(
         positions=f32(pos), normals=f32(cat("normals")), uvs=f32(cat("uvs")),
         tangents=f32(cat("tangents")), velocity=f32(vel), faces=i32(faces),
@@ -148,6 +158,22 @@ def build_scene(parts: list[MeshPart], materials: list[Material], textures: list
         lights=lights, camera=camera, shadow=None, animation=anim, effects=eff, name=name,
         description=description,
     )
+
+
+def texture_has_alpha(image: np.ndarray) -> bool:
+    """Whether an RGBA texture image carries an alpha channel worth reading (not all 1)."""
+    img = np.asarray(image)
+    return img.ndim == 3 and img.shape[-1] == 4 and bool(np.any(img[..., 3] < 1.0))
+
+
+def check_opacity_textures(materials: list[Material], textures: list, name: str) -> None:
+    """Refuse a material that takes its opacity from a texture without alpha."""
+    for m in materials:
+        if m.opacity_source == "texture_alpha" and not (
+                0 <= m.texture < len(textures) and texture_has_alpha(textures[m.texture])):
+            raise ValueError(f"scene {name!r}: material {m.name!r} opacity_source = "
+                             f"\"texture_alpha\" but its texture {m.texture} has no alpha "
+                             f"channel (every texel opaque)")
 
 
 def with_effects(scene: Scene, **changes) -> Scene:

@@ -61,6 +61,22 @@ def alpha(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     return a
 
 
+@jax.named_scope("opacity")
+def opacity(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -> Array:
+    """Opacity float32[N] of blended materials: the material's opacity, times the filtered
+    texture alpha where its opacity_source is "texture_alpha"; 1 for opaque materials."""
+    effects = scene.effects if effects is None else effects
+    m = scene.materials
+    a = _gather(m.opacity, points.material)
+    if effects.textures:
+        tid = _gather(m.texture, points.material)
+        from_tex = _gather(m.opacity_texture, points.material) & (tid >= 0)
+        texel = sample(scene.textures, tid, points.uv, points.duv_dx, points.duv_dy,
+                       effects.aniso_taps)
+        a = a * jnp.where(from_tex, texel[:, 3], 1.0)
+    return a
+
+
 def alpha_test(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -> Array:
     """bool[N]: True where the point survives the alpha test (always, unless effects.alpha_test;
     for alpha-tested materials alpha >= alpha_cutoff). Invalid points are False."""

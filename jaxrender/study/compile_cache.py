@@ -60,10 +60,18 @@ def _listen() -> None:
             _listening = True
 
 
+def env_flag(name: str) -> bool | None:
+    """An on/off environment variable: True (1, true, yes, on), False (0, false, no, off), or
+    None when unset or anything else."""
+    v = os.environ.get(name, "").strip().lower()
+    return True if v in ("1", "true", "yes", "on") else False if v in (
+        "0", "false", "no", "off") else None
+
+
 def turned_off() -> bool:
     """``JAXRENDER_COMPILATION_CACHE=0`` (or false, no, off): no persistent cache, no
     executable store."""
-    return os.environ.get(ENV_OFF, "").strip().lower() in ("0", "false", "no", "off")
+    return env_flag(ENV_OFF) is False
 
 
 def enable(directory: Path | None = None) -> Path | None:

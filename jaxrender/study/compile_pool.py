@@ -42,6 +42,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from jaxrender.spawning import main_hidden
+from jaxrender.study.compile_cache import env_flag
 
 log = logging.getLogger("jaxrender.study")
 
@@ -52,12 +53,8 @@ def use_processes(workers: int) -> bool:
     """Compile in worker processes? ``JAXRENDER_COMPILE_PROCESSES=1`` forces it, ``=0``
     forbids it; otherwise only with more than two workers (the 2-core CI machine keeps
     threads)."""
-    v = os.environ.get(ENV, "").strip().lower()
-    if v in ("1", "true", "yes", "on"):
-        return True
-    if v in ("0", "false", "no", "off"):
-        return False
-    return workers > 2
+    forced = env_flag(ENV)
+    return workers > 2 if forced is None else forced
 
 
 @dataclass(frozen=True)

@@ -16,13 +16,15 @@ an executable XLA compiled just now is stored, never one loaded from JAX's cache
 such an executable serializes without its code and fails only when it runs) nor one jax kept
 in memory (which may have been loaded so): the study compiles what the store misses with
 JAX's cache suspended (``compile_cache.suspended``), and each compile's own events say how it
-went. ``JAXRENDER_COMPILATION_CACHE=0`` turns the store off with the cache.
+went. ``JAXRENDER_COMPILATION_CACHE=0`` turns the store off with the cache; it is off by
+default on the CPU backend (``enabled``).
 
 Loading an entry runs code from it: the store is as trusted as the cache folder it lives in.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -44,11 +46,70 @@ from jaxrender.study import cache, compile_cache
 log = logging.getLogger("jaxrender.study")
 
 SUFFIX = ".jaxexe"
+ENV_STORE = "JAXRENDER_EXECUTABLE_STORE"
 _MAGIC = b"jaxrender executable 1\n"
 # jax options that change no program: where caches and logs go.
 _NEUTRAL_OPTIONS = ("cache", "log", "dump", "explain")
 _counts = {"loaded": 0, "compiled": 0, "unstored": 0}
 _lock = threading.Lock()
+_pending: list | None = None  # executables to store when deferred_stores' block ends
+
+
+class SharedExclusive:
+    """Compiles may overlap one another; serializing or loading an executable overlaps none
+    (XLA:CPU segfaulted once as one thread serialized while another compiled; a later crash
+    came from a compile alone, so this narrows the risk rather than removing it)."""
+
+    def __init__(self):
+        self._cond = threading.Condition()
+        self._shared = 0
+        self._exclusive = False
+        self._waiting = 0
+
+    def shared(self):
+        return _Hold(self, exclusive=False)
+
+    def exclusive(self):
+        return _Hold(self, exclusive=True)
+
+    def waiting(self) -> int:
+        """How many exclusive holds wait."""
+        with self._cond:
+            return self._waiting
+
+    def acquire(self, exclusive: bool) -> None:
+        with self._cond:
+            if exclusive:
+                self._waiting += 1
+                self._cond.wait_for(lambda: not self._exclusive and self._shared == 0)
+                self._waiting -= 1
+                self._exclusive = True
+            else:  # an exclusive hold that waits goes first, so it is never starved
+                self._cond.wait_for(lambda: not self._exclusive and self._waiting == 0)
+                self._shared += 1
+
+    def release(self, exclusive: bool) -> None:
+        with self._cond:
+            if exclusive:
+                self._exclusive = False
+            else:
+                self._shared -= 1
+            self._cond.notify_all()
+
+
+@dataclasses.dataclass
+class _Hold:
+    guard: SharedExclusive
+    exclusive: bool
+
+    def __enter__(self):
+        self.guard.acquire(self.exclusive)
+
+    def __exit__(self, *exc):
+        self.guard.release(self.exclusive)
+
+
+_xla = SharedExclusive()
 
 
 def folder() -> Path:
@@ -56,7 +117,14 @@ def folder() -> Path:
 
 
 def enabled() -> bool:
-    return not compile_cache.turned_off()
+    """Is the store on? ``JAXRENDER_EXECUTABLE_STORE=1`` or ``=0`` says so; by default it is
+    on except on the CPU backend, where XLA segfaulted compiling in a process that had
+    serialized many executables before (the test suite, twice).
+    ``JAXRENDER_COMPILATION_CACHE=0`` turns it off in any case."""
+    if compile_cache.turned_off():
+        return False
+    said = compile_cache.env_flag(ENV_STORE)
+    return jax.default_backend() != "cpu" if said is None else said
 
 
 def _count(what: str) -> None:
@@ -132,7 +200,7 @@ def _environment() -> dict:
             "xla_flags": os.environ.get("XLA_FLAGS", ""), "jax_config": options}
 
 
-def program_key(pipe, fixed, args) -> str | None:
+def program_key(pipe, fixed, args, device=None) -> str | None:
     """The store's key of the program with static jit arguments ``fixed`` (pipeline, static
     config, mode) and dynamic arguments ``args`` (``program.arguments``); None when the store
     is off or the program cannot be named without tracing (an argument that is no array, a
@@ -147,7 +215,7 @@ def program_key(pipe, fixed, args) -> str | None:
         statics = hashlib.sha256(pickle.dumps((static_cfg, mode, treedef))).hexdigest()
         parts = {**_environment(), "pipeline": [pipe.name, _sources(pipe)],
                  "config": repr(static_cfg), "mode": repr(mode), "tree": str(treedef),
-                 "statics": statics,
+                 "statics": statics, "target": None if device is None else int(device.id),
                  "avals": [[str(a.dtype), list(a.shape), bool(a.weak_type)] for a in avals]}
     except (TypeError, ValueError, OSError, AttributeError, pickle.PicklingError) as e:
         log.info("executable store: %s cannot be keyed (%s: %s)", pipe.name,
@@ -170,17 +238,20 @@ def pack(compiled) -> bytes:
     """A compiled jax program as bytes (executable and pytree structures)."""
     from jax.experimental.serialize_executable import serialize
 
-    return pickle.dumps(serialize(compiled))
+    with _xla.exclusive():
+        return pickle.dumps(serialize(compiled))
 
 
-def unpack(payload: bytes):
-    """The jax Compiled program of ``pack``'s bytes, loaded onto the first device."""
+def unpack(payload: bytes, device=None):
+    """The jax Compiled program of ``pack``'s bytes, loaded onto ``device`` (default: the
+    first device)."""
     from jax.experimental.serialize_executable import deserialize_and_load
 
     exe, in_tree, out_tree = pickle.loads(payload)
-    dev = jax.devices()[0]
-    return deserialize_and_load(exe, in_tree, out_tree, backend=dev.client,
-                                execution_devices=[dev])
+    dev = jax.devices()[0] if device is None else device
+    with _xla.exclusive():
+        return deserialize_and_load(exe, in_tree, out_tree, backend=dev.client,
+                                    execution_devices=[dev])
 
 
 def read(key: str | None) -> bytes | None:
@@ -228,25 +299,57 @@ def compile_fresh(key: str | None, fixed, args):
     on."""
     lowered = program.lower_arguments(fixed, args)
     before = compile_cache.thread_compiles()
-    compiled = lowered.compile()
+    with _xla.shared():
+        compiled = lowered.compile()
     if key is None:
         return compiled, None
     ran, loaded = (b - a for a, b in zip(before, compile_cache.thread_compiles()))
-    payload = None
+    name = fixed[0].name
     if loaded:
-        why = "it was loaded from JAX's compilation cache"
+        _not_stored(name, "it was loaded from JAX's compilation cache")
     elif not ran:
-        why = "jax had it in memory already"
+        _not_stored(name, "jax had it in memory already")
     else:
-        try:
-            payload = pack(compiled)
-            why = None if write(key, payload) else "it could not be written"
-        except Exception as e:  # an executable that does not serialize is still usable
-            why = f"{type(e).__name__}: {e}"
-    if why:
-        log.info("executable store: %s not stored: %s", fixed[0].name, why)
-        _count("unstored")
-    return compiled, payload
+        with _lock:
+            if _pending is not None:
+                _pending.append((key, compiled, name))
+                return compiled, None
+        return compiled, _store(key, compiled, name)
+    return compiled, None
+
+
+def _not_stored(name: str, why: str) -> None:
+    log.info("executable store: %s not stored: %s", name, why)
+    _count("unstored")
+
+
+def _store(key: str, compiled, name: str) -> bytes | None:
+    """Pack and write one executable; its bytes, or None (logged) when it does not pack."""
+    try:
+        payload = pack(compiled)
+    except Exception as e:  # an executable that does not serialize is still usable
+        _not_stored(name, f"{type(e).__name__}: {e}")
+        return None
+    if not write(key, payload):
+        _not_stored(name, "it could not be written")
+    return payload
+
+
+@contextlib.contextmanager
+def deferred_stores():
+    """Store the executables compiled inside the block when it ends, one after another in
+    this thread, so that no pack runs beside a compile in another thread, including compiles
+    that do not go through this module (the guard covers only those that do)."""
+    global _pending
+    with _lock:
+        outer, _pending = _pending, []
+    try:
+        yield
+    finally:
+        with _lock:
+            todo, _pending = _pending, outer
+        for key, compiled, name in todo:
+            _store(key, compiled, name)
 
 
 def note_worker_program(stored: bool) -> None:
@@ -256,17 +359,20 @@ def note_worker_program(stored: bool) -> None:
 
 
 def compile_program(pipe, scene, cameras, cfg, *, sequence: bool = False,
-                    warmup_frames: int = 0) -> timing.Compiled:
+                    warmup_frames: int = 0, device=None) -> timing.Compiled:
     """``timing.compile_program`` through the store: loaded when stored (method "stored",
-    compile_ms the preparation and load), else compiled and stored."""
+    compile_ms the preparation and load), else compiled and stored. ``device``: the device
+    it runs on (default: the first), a part of the store's key."""
     t0 = time.perf_counter()
     fixed, args, prepared = program.arguments(pipe, scene, cameras, cfg, sequence=sequence,
                                               warmup_frames=warmup_frames)
-    key = program_key(pipe, fixed, args)
+    if device is not None:  # committed arguments: the program is lowered for that device
+        args = jax.device_put(args, device)
+    key = program_key(pipe, fixed, args, device)
     payload = read(key)
     if payload is not None:
         try:
-            compiled = unpack(payload)
+            compiled = unpack(payload, device)
         except Exception as e:
             log.warning("executable store: %s does not load (%s: %s); compiling",
                         _path(key), type(e).__name__, e)
@@ -281,5 +387,6 @@ def compile_program(pipe, scene, cameras, cfg, *, sequence: bool = False,
                            (time.perf_counter() - t0) * 1e3)
 
 
-__all__ = ["SUFFIX", "compile_fresh", "compile_program", "counts", "describe",
-           "enabled", "folder", "note_worker_program", "pack", "program_key", "read", "unpack", "write"]
+__all__ = ["ENV_STORE", "SUFFIX", "SharedExclusive", "compile_fresh", "compile_program", "counts",
+           "deferred_stores", "describe", "enabled", "folder", "note_worker_program", "pack",
+           "program_key", "read", "unpack", "write"]

@@ -1,6 +1,7 @@
 """Run a study: render every (scene, camera path, pipeline variant, frame), score it against
 the cached reference, time it and append its rows; then export and summarise. Figures are
-drawn afterwards from the output directory (``jaxrender.figures.draw_run_figures``).
+drawn afterwards from the output directory (``jaxrender.figures.draw_run_figures``); each
+sequence is rendered, timed and scored by ``sequence_run``.
 
 The output directory holds ``results.jsonl`` (the store), ``results.csv``, ``study.toml`` (the
 resolved config), ``environment.json`` (device, jax version, code version), ``summary.csv``,
@@ -11,23 +12,26 @@ resolved config), ``environment.json`` (device, jax version, code version), ``su
 from __future__ import annotations
 
 import json
-import math
-import re
 import time
-from dataclasses import dataclass, field
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 
-import numpy as np
+import jax
 from tqdm import tqdm
 
 from jaxrender import timing
-from jaxrender.pipelines.program import PipelineOverflow, stack_cameras
-from jaxrender.study import (backend, cache, compile_cache, executables, shader_cost, store,
+from jaxrender.errors import StudyError
+from jaxrender.study import (backend, cache, compile_cache, executables, matching, store,
                              summary, time_series)
-from jaxrender.study.programs import (COMPILE_WORKERS, compile_all, compile_variant,
-                                      program_key, rendered_path, variant_scene)
+from jaxrender.study import devices as devices_mod
+from jaxrender.study.programs import (compile_all, compile_variant, compile_workers,
+                                      program_identity, program_key, rendered_path,
+                                      retargeted, variant_scene)
 from jaxrender.study.references import reference_frames
-from jaxrender.study.specs import Study, to_toml
+from jaxrender.study.sequence_run import run_sequence, sequence_key
+from jaxrender.study.specs import Study, Variant, to_toml
 
 
 @dataclass
@@ -45,171 +49,44 @@ class RunResult:
     time_fits: list = field(default_factory=list)  # time_series.Series of a shader_cost sweep
 
 
-def _slug(s: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "-", s).strip("-") or "x"
-
-
-def _save_npz(path: Path, meta: dict, **arrays) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp.npz")
-    with open(tmp, "wb") as f:
-        np.savez_compressed(f, meta=np.array(json.dumps(meta, sort_keys=True)), **arrays)
-    tmp.replace(path)
-
-
-def _small(a) -> np.ndarray:
-    """Half floats and narrow integers: the figures need no more, and every saved frame of
-    every sequence is kept."""
-    a = np.asarray(a)
-    if a.dtype.kind == "f":
-        return a.astype(np.float16)
-    if a.dtype.kind == "b":
-        return a.astype(np.uint8)
-    if a.dtype.kind in "iu" and a.size and a.min() >= -32768 and a.max() < 32768:
-        return a.astype(np.int16)
-    return a
-
-
-def _seq(study: Study, spec, path, variant) -> str:
-    ref = study.reference
-    return store.seq_key(
-        [spec.source, spec.params, spec.file_hash], [path.name, path.type, path.frames,
-                                                     path.params],
-        [variant.label, variant.type, variant.params_json], study.resolution,
-        [ref.pipeline, ref.params], sorted(study.metrics), study.warmup_frames,
-    )
-
-
-def _render_timed(study: Study, seq_prog, one_prog, scene, cams_all, cams):
-    """(frames of the sequence, its median ms, single-frame median ms per scored frame or
-    NaN without a single-frame program)."""
-    reps, warm = study.timing.repeats, study.timing.warmup
-    path = stack_cameras(cams_all)  # once, outside the timed calls
-    frames, seq_ms, _ = timing.time_call(seq_prog.call, scene, path, repeats=reps, warmup=warm)
-    if one_prog is None:
-        return frames, seq_ms, [float("nan")] * len(cams)
-    for _ in range(warm):
-        timing.block(one_prog.call(scene, cams[0]))
-    single = [timing.time_call(one_prog.call, scene, cam, repeats=reps)[1] for cam in cams]
-    return frames, seq_ms, single
-
-
-def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, out_dir: Path,
-                 progress=None, compiled: tuple | None = None) -> list[dict]:
-    """Render one sequence (``cams_all``: the rendered path, warm-up frames first) as one
-    ``render_sequence`` program, time it and its single-frame program, score every scored
-    frame; returns its rows (not yet stored). ``compiled``: (sequence, single) programs."""
-    w, h = study.resolution
-    warm = study.warmup_frames
-    cams = cams_all[warm:]
-    scene = variant_scene(scene, variant)
-    seq_prog, one_prog = compiled or (
-        compile_variant(study, scene, cams_all, variant, sequence=True),
-        compile_variant(study, scene, cams[0], variant, sequence=False)
-        if study.timing.single_frame else None)
-    try:
-        frames, seq_ms, single_ms = _render_timed(study, seq_prog, one_prog, scene, cams_all,
-                                                  cams)
-    except PipelineOverflow as e:
-        raise PipelineOverflow(f"scene {spec.label!r}, path {path.name!r}, pipeline "
-                               f"{variant.label!r} {variant.params_json}: {e}") from None
-    seq = _seq(study, spec, path, variant)
-    images = np.asarray(frames.image, np.float32)
-    counts_t = {k: np.asarray(v) for k, v in (frames.counts or {}).items()}
-    rows = []
-    for t in range(len(cams)):
-        img = images[t]
-        ref = np.asarray(refs[t]["image"], np.float32)
-        if img.shape != ref.shape:
-            raise ValueError(f"pipeline {variant.label!r} returned an image of shape "
-                             f"{img.shape}, the reference is {ref.shape}")
-        counts = {k: store.json_number(v[t]) for k, v in counts_t.items() if v.ndim == 1}
-        counts = {k: v for k, v in counts.items() if v is not None}
-        counts.update(_work_columns(scene, counts))
-        finite = bool(np.all(np.isfinite(img))) and all(
-            math.isfinite(v) for v in counts.values() if isinstance(v, float))
-        metrics, err = backend.frame_metrics(img, ref, study.metrics)
-        row = {
-            "seq": seq, "scene": spec.label, "camera_path": path.name,
-            "pipeline": variant.label, "pipeline_type": variant.type,
-            "params": dict(variant.params), "frame": t, "width": w, "height": h,
-            **metrics, **counts, "time_ms": seq_ms / len(cams_all),
-            "time_ms_single": single_ms[t], "sequence_ms": seq_ms,
-            "sequence_frames": len(cams_all), "warmup_frames": warm,
-            "compile_ms": seq_prog.compile_ms,
-            "compile_ms_single": one_prog.compile_ms if one_prog else float("nan"),
-            "compile_method": seq_prog.method, "compile_workers": COMPILE_WORKERS,
-            "finite": finite, **env,
-        }
-        if "convergence_psnr" in refs[t]:
-            row["reference_convergence_psnr"] = float(refs[t]["convergence_psnr"])
-        rows.append(row)
-        if t in study.save_frames:
-            aux = {k: np.asarray(v)[t] for k, v in (frames.aux or {}).items()}
-            _save_frame_images(out_dir, spec, path, seq, t, row, img, err, ref, aux)
-        if progress is not None:
-            progress.update(1)
-    motion = (backend.motion_field(scene, cams, w, h, start=warm)
-              if backend.needs_motion(study.metrics) and len(cams) > 1 else None)
-    seq_metrics, per_frame = backend.sequence_metrics(
-        images, np.stack([np.asarray(r["image"], np.float32) for r in refs]), study.metrics,
-        motion)
-    for r, te in zip(rows, per_frame):
-        r.update(seq_metrics)
-        r["temporal_error_frame"] = te
-    return rows
-
-
-def _work_columns(scene, counts: dict) -> dict:
-    """``shader_cost`` (the scene's, as the variant renders it) and ``shading_work`` (layer
-    evaluations: shade_invocations x (1 + shader_cost)); none for a scene without effects."""
-    cost = backend.shader_cost(scene)
-    if cost is None:
-        return {}
-    out = {shader_cost.KEY: cost}
-    if isinstance(counts.get("shade_invocations"), (int, float)):
-        out[shader_cost.WORK] = shader_cost.shading_work(counts["shade_invocations"], cost)
-    return out
-
-
-def _save_frame_images(out_dir, spec, path, seq, t, row, img, err, ref, aux) -> None:
-    meta = {k: row[k] for k in ("scene", "camera_path", "pipeline", "pipeline_type", "params",
-                                 "frame", "seq")}
-    aux = {f"aux_{k}": _small(v) for k, v in aux.items() if np.asarray(v).ndim >= 1}
-    stem = f"{_slug(spec.label)}__{_slug(path.name)}__{seq}__f{t}"
-    _save_npz(out_dir / "images" / f"{stem}.npz", meta, image=_small(img), error=_small(err),
-              **aux)
-    ref_stem = f"{_slug(spec.label)}__{_slug(path.name)}__reference__f{t}"
-    if not (out_dir / "images" / f"{ref_stem}.npz").exists():
-        _save_npz(out_dir / "images" / f"{ref_stem}.npz",
-                  {"scene": spec.label, "camera_path": path.name, "pipeline": "reference",
-                   "frame": t}, image=_small(ref))
-
 
 # ------------------------------------------------------------------ the whole study
 
 
 def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = True,
-              log=print) -> RunResult:
+              log=print, devices: int | None = None) -> RunResult:
     """Render, time and score every sequence of ``study`` not already stored in ``out_dir``
-    (``force``: recompute all), then export results.csv and summary.csv. Draws no figures."""
+    (``force``: recompute all), then export results.csv and summary.csv. Draws no figures.
+    The sequences spread over ``devices`` local devices (None: all of them) and, under JAX's
+    distributed runtime, over the processes, which share ``out_dir`` (``study.devices``);
+    the first process exports once every process has stored its rows."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     compile_cache.enable()
     env = timing.environment()
-    _write_run_files(study, out_dir, env)
-    st = store.ResultStore(out_dir / "results.jsonl", force=force)
+    first = jax.process_index() == 0
+    if first:
+        _write_run_files(study, out_dir, env)
+    st = _open_store(out_dir, force)
     if st.dropped_bytes:
         log(f"note: cut off a partial last line ({st.dropped_bytes} bytes) from an interrupted run")
     plan = [(spec, path, v) for spec in study.scenes for path in study.paths
             for v in study.variants]
-    seqs = {_seq(study, s, p, v) for s, p, v in plan}
-    todo = [(s, p, v) for s, p, v in plan if not st.complete(_seq(study, s, p, v), p.frames)]
+    seqs = {sequence_key(study, s, p, v) for s, p, v in plan}
+    todo = [(s, p, v) for s, p, v in plan
+            if not st.complete(sequence_key(study, s, p, v), p.frames)]
     skipped = len(plan) - len(todo)
     if skipped:
         log(f"{skipped} of {len(plan)} sequences already stored; computing {len(todo)}")
-    if todo:
-        _render_all(study, todo, st, env, out_dir, progress, log)
+    computed, compiled = (_render_all(study, todo, st, env, out_dir, progress, log, devices)
+                          if todo else (0, {}))
+    if jax.process_count() > 1:  # every process's rows are in the file: read them all
+        devices_mod.wait_for_all_processes("stored")
+        st = store.ResultStore(out_dir / "results.jsonl")
+        if not first:
+            return RunResult(out_dir, store.latest_rows(st.rows, seqs), computed, skipped, [])
+    # Matches bisect against every process's rows: the first process runs them.
+    seqs |= _run_matches(study, st, env, out_dir, compiled, log)
     rows = store.latest_rows(st.rows, seqs)
     store.export_csv(rows, out_dir / "results.csv")
     summ = summary.summarize(rows)
@@ -224,7 +101,18 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     warns = summary.convergence_warnings(study, rows)
     for w in warns:
         log(f"warning: {w}")
-    return RunResult(out_dir, rows, len(todo), skipped, summ, warns, study.figures, fits)
+    return RunResult(out_dir, rows, computed, skipped, summ, warns, study.figures, fits)
+
+
+def _open_store(out_dir: Path, force: bool) -> store.ResultStore:
+    """The run's store; with several processes the first one discards old rows (``force``)
+    before any other opens it."""
+    path = out_dir / "results.jsonl"
+    if jax.process_count() == 1:
+        return store.ResultStore(path, force=force)
+    st = store.ResultStore(path, force=force) if jax.process_index() == 0 else None
+    devices_mod.wait_for_all_processes("store open")
+    return st or store.ResultStore(path)
 
 
 def _write_run_files(study: Study, out_dir: Path, env: dict) -> None:
@@ -234,8 +122,27 @@ def _write_run_files(study: Study, out_dir: Path, env: dict) -> None:
          "date": time.strftime("%Y-%m-%d %H:%M:%S")}, indent=2) + "\n")
 
 
-def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log) -> None:
-    """Compile everything, then render, time, score and store each sequence of ``todo``."""
+def group_of(spec, variant) -> tuple:
+    """The unit of placement: a scene and a program (all paths of a variant, and the sweep
+    points that differ only in traced values, share its programs)."""
+    return program_identity(spec, variant)[:3]
+
+
+def _placement(study: Study, todo, devices) -> devices_mod.Placement:
+    groups: dict = {}
+    for spec, path, v in todo:
+        g = group_of(spec, v)
+        groups[g] = groups.get(g, 0) + path.frames + study.warmup_frames
+    return devices_mod.place(groups, devices_mod.select_devices(devices))
+
+
+def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log,
+                devices: int | None = None) -> tuple[int, dict]:
+    """Compile everything, then render, time, score and store each sequence of ``todo`` that
+    this process renders (``devices``: how many local devices; None: all); returns how many
+    it rendered and the compiled programs by ``program_key``."""
+    placement = _placement(study, todo, devices)
+    todo = [t for t in todo if placement.device_of(group_of(t[0], t[2])) is not None]
     total = sum(p.frames for _, p, _ in todo)
     bar = tqdm(total=total, unit="frame", disable=not progress, dynamic_ncols=True)
     try:
@@ -248,26 +155,152 @@ def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log)
                     scenes[spec.label], rendered_path(study, path), *study.resolution)
         bar.set_description("compiling; references")
         t0, before = time.perf_counter(), (compile_cache.counts(), executables.counts())
-        compiled = compile_all(study, todo, scenes, cams)
-        log(f"compiled or loaded {len(compiled)} program(s) with {COMPILE_WORKERS} worker(s) "
-            f"and rendered the references in {time.perf_counter() - t0:.1f} s"
+        where = {g: placement.devices[d] for g, d in placement.group_device.items()}
+        compiled = compile_all(study, todo, scenes, cams,
+                               device_of=lambda spec, v: where[group_of(spec, v)])
+        on = (f" for {len(placement.devices)} device(s)" if len(placement.devices) > 1 else "")
+        log(f"compiled or loaded {len(compiled)} program(s){on} with {compile_workers()} "
+            f"worker(s) and rendered the references in {time.perf_counter() - t0:.1f} s"
             f"{executables.describe(before[1])}{compile_cache.describe(before[0])}")
         t0 = time.perf_counter()
-        for spec in study.scenes:
-            for path in study.paths:
-                variants = [v for s, p, v in todo if s is spec and p is path]
-                if not variants:
-                    continue
-                scene, seq_cams = scenes[spec.label], cams[spec.label, path.name]
-                refs = reference_frames(scene, spec, seq_cams[study.warmup_frames:],
-                                        study.reference, study.resolution,
-                                        first_frame=study.warmup_frames)
-                for v in variants:
-                    bar.set_description(f"{spec.label}/{path.name}: {v.label}")
-                    progs = (compiled[program_key(spec, v, len(seq_cams))],
-                             compiled.get(program_key(spec, v)))
-                    st.append(run_sequence(study, scene, spec, path, seq_cams, v, refs, env,
-                                           out_dir, progress=bar, compiled=progs))
+        _render_placed(study, todo, st, env, out_dir, bar, compiled, scenes, cams, placement)
     finally:
         bar.close()
     log(f"rendered, timed and scored {total} frame(s) in {time.perf_counter() - t0:.1f} s")
+    return len(todo), compiled
+
+
+def _render_placed(study, todo, st, env, out_dir, bar, compiled, scenes, cams, placement):
+    """Each sequence on its group's device, one thread per device when there are several;
+    rows are stored here, a sequence's together, as each finishes."""
+    n = len(placement.devices)
+    on_device: dict = {}  # (scene label, device index) -> the scene's arrays there
+    jobs = []
+    for spec in study.scenes:
+        for path in study.paths:
+            variants = [v for s, p, v in todo if s is spec and p is path]
+            if not variants:
+                continue
+            seq_cams = cams[spec.label, path.name]
+            refs = reference_frames(scenes[spec.label], spec, seq_cams[study.warmup_frames:],
+                                    study.reference, study.resolution,
+                                    first_frame=study.warmup_frames)
+            for v in variants:
+                d = placement.device_of(group_of(spec, v))
+                if (spec.label, d) not in on_device:
+                    on_device[spec.label, d] = (scenes[spec.label] if n == 1 else jax.device_put(
+                        scenes[spec.label], placement.devices[d]))
+                device = placement.devices[d]
+                extra = {"device_index": int(device.id), "devices": n}
+                progs = (compiled[program_key(spec, v, len(seq_cams))],
+                         compiled.get(program_key(spec, v)))
+                jobs.append((d, partial(run_sequence, study, on_device[spec.label, d], spec,
+                                        path, seq_cams, v, refs, {**env, **extra}, out_dir,
+                                        progress=bar, compiled=progs),
+                             f"{spec.label}/{path.name}: {v.label}"))
+    if n == 1:
+        for _, job, what in jobs:
+            bar.set_description(what)
+            st.append(job())
+        return
+    pools = [ThreadPoolExecutor(max_workers=1, thread_name_prefix=f"device{i}")
+             for i in range(n)]
+    try:
+        futures = [pools[d].submit(job) for d, job, _ in jobs]
+        bar.set_description(f"rendering on {n} devices")
+        for f in as_completed(futures):
+            st.append(f.result())
+    finally:
+        for pool in pools:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+# ------------------------------------------------------------------ matched points
+
+TIME_COLUMNS = ("time_ms", "time_ms_single", "sequence_ms")
+
+
+def _match_seq(study: Study, spec, path, entry, m) -> str:
+    """A matched point's sequence key: the entry, the match and the key of the sequence it
+    aims at (a recomputed target recomputes the match), not the value it finds."""
+    against = next(p for p in study.pipelines if p.label == m.against).variants[0]
+    aim = [m.against, m.on, m.tolerance, m.probes, m.outside,
+           sequence_key(study, spec, path, against)]
+    key = Variant(m.label, entry.type, entry.params + (("match", aim), ("sweep", entry.sweep)))
+    return sequence_key(study, spec, path, key)
+
+
+def _run_matches(study: Study, st, env, out_dir: Path, compiled: dict, log) -> set:
+    """Bisect every match of the study on every scene and path not already stored (after the
+    sequences they aim at and bracket by are); returns the matched points' sequence keys."""
+    found = matching.entries(study)
+    seqs, scenes = set(), {}
+    for spec in study.scenes:
+        for path in study.paths:
+            todo = [(k, e, m, _match_seq(study, spec, path, e, m)) for k, e, m in found]
+            seqs |= {seq for *_, seq in todo}
+            todo = [t for t in todo if not st.complete(t[3], path.frames)]
+            if not todo:
+                continue
+            if spec.label not in scenes:
+                scenes[spec.label] = backend.load_scene(spec.source, dict(spec.params))
+            scene = scenes[spec.label]
+            cams = backend.make_cameras(scene, rendered_path(study, path), *study.resolution)
+            refs = reference_frames(scene, spec, cams[study.warmup_frames:], study.reference,
+                                    study.resolution, first_frame=study.warmup_frames)
+            ctx = (scene, spec, path, cams, refs, env, out_dir, compiled)
+            for key, entry, m, seq in todo:
+                rows = _match_one(study, st, ctx, key, entry, m, seq)
+                st.append(rows)
+                r = rows[0]
+                log(f"match {m.label} ({spec.label}/{path.name}): {r['match_param']} = "
+                    f"{r['params'][r['match_param']]:.6g} gives {m.on} {r['match_value']:.6g},"
+                    f" target {r['match_target']:.6g} ({m.against}), {r['match_probes']} probes")
+    return seqs
+
+
+def _match_one(study: Study, st, ctx, key: str, entry, m, seq: str) -> list[dict]:
+    scene, spec, path, cams, refs, env, out_dir, compiled = ctx
+    (param, _), = entry.sweep
+
+    def by_seq(v):
+        return store.latest_rows(st.rows, {sequence_key(study, spec, path, v)})
+
+    against = next(p for p in study.pipelines if p.label == m.against).variants[0]
+    target = matching.mean_of(by_seq(against), m.on)
+    points = [(dict(v.params)[param], matching.mean_of(by_seq(v), m.on)) for v in entry.variants]
+    if target is None or any(q is None for _, q in points):
+        raise StudyError(study.file, f"{key}.on", f"the rows of {m.against!r} and "
+                         f"{entry.label!r} hold no number {m.on!r}")
+    template = entry.variants[0]
+    progs = tuple(compiled.get(program_key(spec, template, n)) or compile_variant(
+        study, variant_scene(scene, template), cams if n else cams[study.warmup_frames],
+        template, sequence=bool(n)) for n in
+        ((len(cams), 0) if study.timing.single_frame else (len(cams),)))
+    progs = progs if len(progs) == 2 else (progs[0], None)
+
+    # A probe aiming at a count or a metric is timed once, not repeated: only the final
+    # render's time is kept, and only a time match needs its probes' times to be good.
+    quick = study if m.on in TIME_COLUMNS else replace(
+        study, timing=replace(study.timing, warmup=0, repeats=1))
+
+    def render(value, save=False):
+        v = Variant(m.label, entry.type, tuple(sorted({**dict(template.params),
+                                                         param: value}.items())))
+        run = tuple(p and retargeted(p, study, v) for p in progs)
+        return run_sequence(study if save else quick, scene, spec, path, cams, v, refs, env,
+                            out_dir, compiled=run, seq=seq, save_images=save)
+
+    try:
+        out = matching.bisect(lambda x: matching.mean_of(render(x), m.on), points, target,
+                              m.tolerance, m.probes, nearest=m.outside == "nearest")
+    except matching.OutOfRange as e:
+        raise StudyError(study.file, key, f"the target {m.on} = {target:.6g} ({m.against!r} "
+                         f"on scene {spec.label!r}, path {path.name!r}) is outside the sweep: "
+                         f"{e}; widen {key.rsplit('.match', 1)[0]}.sweep.{param}") from None
+    rows = render(out.value, save=True)
+    reached = matching.mean_of(rows, m.on)
+    for r in rows:
+        r.update(zip(matching.COLUMNS, (m.against, m.on, target, reached, param,
+                                         out.probes + 1, out.bracketed)))
+    return rows

@@ -22,7 +22,7 @@ from jaxrender.errors import StudyError, UserError
 from jaxrender.metrics import DEFAULT_METRICS, METRICS
 from jaxrender.parsing import parse_resolution
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED, overridden_message
-from jaxrender.study import backend, shader_cost
+from jaxrender.study import backend, matching, shader_cost
 from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
                                    ReferenceSpec, SceneSpec, Study, TimingSpec, Variant)
 from jaxrender.study.tables import (Checker, type_name, key_path, read_table, read_toml,
@@ -113,7 +113,7 @@ def _check_value(ck: Checker, path: str, value, default):
 _ENTRY_KEYS = {  # the keys a study's entries accept besides their spec's fields
     "scenes": ("name",),
     "paths": ("preset", "description"),
-    "pipelines": ("preset", "description"),
+    "pipelines": ("preset", "description", "match"),
 }
 
 
@@ -266,8 +266,9 @@ def _pipeline(ck: Checker, item, path: str, local, resolution) -> PipelineSpec:
                                 shader_cost.split(dict(v.params))[0])
         except (TypeError, ValueError, KeyError) as e:
             ck.fail(f"{path}.sweep", f"pipeline {ptype!r} rejects {v.params_json}: {e}")
+    matches = matching.parse(ck, d.get("match"), path, label, ptype, sweep)
     return PipelineSpec(label, ptype, tuple(sorted(fixed.items())), tuple(sweep.items()),
-                        mode, variants, source)
+                        mode, variants, source, matches)
 
 
 def _reference(ck: Checker, raw, resolution) -> ReferenceSpec:
@@ -364,6 +365,7 @@ def parse_study(data: dict, file: str, *, study_dir: Path, configs: Path | None 
                              for i, item in enumerate(ck.list_(d["pipelines"], "pipelines"))],
                         "label", "pipelines", "pipeline label",
                         "; give each entry a distinct `label`")
+    matching.check(ck, pipelines, metrics)
     reference = _reference(ck, d["reference"], resolution)
     return Study(file, d["name"], d["description"], resolution, scenes, paths, pipelines,
                  reference, metrics, figures, save_frames, timing, d["warmup_frames"])

@@ -20,6 +20,7 @@ FIGURES = (
     "temporal",
     "dacs_decisions",
     "object_space_marking",
+    "tads_samples",
     "visbuffer_waves",
     "time_work",
     "summary_table",
@@ -70,6 +71,23 @@ class Variant:
 
 
 @dataclass(frozen=True)
+class MatchSpec:
+    """A point of a pipeline entry's one-key sweep found by bisection (``study.matching``): the
+    swept value at which the mean over a sequence's scored frames of ``on`` (a metric, a count
+    or ``time_ms``) equals that of the pipeline labelled ``against``, within ``tolerance`` (in
+    ``on``'s units; 0: as close as ``probes`` renders get). Its rows carry ``label``. A target
+    the sweep does not reach is refused (``outside = "refuse"``) or, with ``"nearest"``, met
+    by the sweep's point closest to it, its rows saying ``match_reached = false``."""
+
+    label: str
+    against: str
+    on: str
+    tolerance: float = 0.0
+    probes: int = _field(24, lo=1)
+    outside: str = "refuse"
+
+
+@dataclass(frozen=True)
 class PipelineSpec:
     label: str
     type: str
@@ -78,6 +96,8 @@ class PipelineSpec:
     sweep_mode: str = "cartesian"
     variants: tuple[Variant, ...] = _field((), toml=False)
     origin: str = field(default="", compare=False, metadata={"toml": False})
+    # Points of the sweep matched to another pipeline's measurement ([[pipelines.match]]).
+    match: tuple[MatchSpec, ...] = _field((), toml=False)
 
 
 @dataclass(frozen=True)
@@ -174,4 +194,6 @@ def to_toml(study: Study) -> str:
             extra = {"name": spec.source} if section == "scenes" else {}
             origin = [f"# {spec.origin}"] if getattr(spec, "origin", "") else []
             lines += ["", f"[[{section}]]", *origin, *_fields_toml(spec, **extra)]
+            for m in getattr(spec, "match", ()):
+                lines += ["", "[[pipelines.match]]", *_fields_toml(m)]
     return "\n".join(lines) + "\n"

@@ -14,6 +14,7 @@ scene, path and parameters). Rows of other keys stay in the file but are not exp
 from __future__ import annotations
 
 import csv
+import fcntl
 import hashlib
 import io
 import json
@@ -110,10 +111,13 @@ class ResultStore:
         return self._frames.get(seq, set()) >= set(range(frames))
 
     def append(self, rows: list[dict]) -> None:
-        """Write complete lines in one write, then fsync."""
+        """Write complete lines in one write, then fsync; under an exclusive lock, so that the
+        processes of a distributed run sharing the file never interleave their lines (a short
+        write leaves the rest of the blob to a second write)."""
         blob = "".join(json.dumps(r, sort_keys=True) + "\n" for r in rows).encode()
         fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
         try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
             view = memoryview(blob)
             while view:
                 n = os.write(fd, view)

@@ -37,6 +37,10 @@ TABLES = {
         "title": "t", "entries": [{"label": "os", "image": _img(6),
                                    "chunk_state": np.array([[0, 1], [2, 1]]),
                                    "mip_level": _img(7)[..., 0]}]}),
+    "tads": (figures.fig_tads_samples, {
+        "title": "t", "entries": [{"label": "tads", "image": _img(8),
+                                   "sample_class": np.arange(192).reshape(12, 16) % 6 - 1,
+                                   "duplicates": np.eye(12, 16, dtype=np.int32)}]}),
     "waves": (figures.fig_visbuffer_waves, {
         "title": "t", "labels": ["vb", "vb vrs=2x2"], "waves": [120.0, 40.0],
         "utilization": [0.9, 0.6]}),

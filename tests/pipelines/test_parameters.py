@@ -56,6 +56,8 @@ SCENES = {
     "foliage": ("foliage", {"n_cards": 40, "card_size": 1.2}),
     "spheres": ("spheres", {"rows": 1, "cols": 2, "lat": 6, "lon": 12}),
     "sliver": ("sliver", {"n_slivers": 16, "n_degenerate": 4}),
+    # Panes and particles: pixels of several transparent layers (the blending settings act).
+    "glass": ("glass", {"n_panes": 4, "n_particles": 8}),
 }
 
 
@@ -68,14 +70,30 @@ class Case(NamedTuple):
     sequence: bool = False
 
 
-F, S, SL = "foliage", "spheres", "sliver"
+F, S, SL, G = "foliage", "spheres", "sliver", "glass"
 SEQ = {"sequence": True}
+
+
+
+def _blending(**extra) -> dict[str, Case]:
+    """The transparent pass's settings (``BlendingConfig``), on the glass scene: a cap of one
+    layer runs more passes (counts), or refuses the frame with "error"."""
+    return {"oit": Case(G, {}, "weighted", **extra),
+            "transparent_layers": Case(G, {}, 1, **extra),
+            "transparent_overflow": Case(G, {"transparent_layers": 1}, "error", **extra)}
+
+
 # DACS on the spheres: a threshold at which the luma weights and the variance space both move
 # decisions (the threshold is traced: any value shares one program).
 LUMA_THRESHOLD = 1.7e-5
 # object_space: 18 chunks of 64 shadels, fewer than the ~20 the pan marks at bias 0 (the MIP
 # bias is raised until they fit) and more than its coarsest levels need (16 overflow).
 SMALL_STORE = 18 * 64
+# With bias_feedback the pan's first frame is over that store (20 chunks: the bias is raised for
+# the next frame, by 2 here) and the next just under it (17: with bias_low = 1 the bias relaxes
+# by bias_relax).
+FEEDBACK = {"store_shadels": SMALL_STORE, "bias_feedback": True, "bias_step": 2.0,
+            "bias_low": 1.0}
 
 CASES: dict[str, dict[str, Case]] = {
     "reference": {
@@ -84,6 +102,8 @@ CASES: dict[str, dict[str, Case]] = {
         "convergence": Case(F, {}, True),  # adds counts["convergence_psnr"]
     },
     "forward": {
+        **_blending(),
+        "sort_transparent": Case(G, {}, False),
         "cull_backfaces": Case(F, {}, True),
         "z_prepass": Case(F, {}, True),
         "msaa": Case(F, {}, 4),
@@ -91,19 +111,24 @@ CASES: dict[str, dict[str, Case]] = {
         "wave_size": Case(F, {}, 64),
     },
     "deferred": {
+        **_blending(),
         "cull_backfaces": Case(F, {}, True),
         "msaa": Case(F, {}, 4),
         "per_sample_shading": Case(F, {"msaa": 4}, True),
         "wave_size": Case(F, {}, 64),
     },
     "visbuffer": {
+        **_blending(),
         "cull_backfaces": Case(F, {}, True),
         # The batch / primitive split only moves where an id overflows: with both at 0 bits the
         # second triangle of a card does not fit (the frame is refused, PipelineOverflow).
-        "batch_bits": Case(F, {"primitive_bits": 0}, 0),
-        "primitive_bits": Case(F, {"batch_bits": 0}, 0),
-        "instance_bits": Case(F, {}, 8),  # the packed ids (aux) move
+        "id_layout": Case(F, {}, "fixed"),  # the packed ids (aux) move
+        "batch_bits": Case(F, {"id_layout": "fixed", "primitive_bits": 0}, 0),
+        "primitive_bits": Case(F, {"id_layout": "fixed", "batch_bits": 0}, 0),
+        "instance_bits": Case(F, {"id_layout": "fixed"}, 8),  # the packed ids (aux) move
         "wave_size": Case(F, {}, 64),
+        "tiling": Case(F, {}, "tiles"),  # waves, unfilled lanes and command bytes move
+        "vertex_fetch": Case(F, {}, "pixel"),  # counts["vertex_invocations"]
         "vrs": Case(F, {}, "fixed"),
         "vrs_rate": Case(F, {"vrs": "fixed"}, "1x2"),
         "vrs_thresholds": Case(F, {"vrs": "distance"}, (3.0, 5.0)),
@@ -111,6 +136,7 @@ CASES: dict[str, dict[str, Case]] = {
                            (("2x2", "1x1"), ("1x2", "2x1"))),
     },
     "dacs": {
+        **_blending(),
         "cull_backfaces": Case(F, {}, True),
         "threshold": Case(F, {}, 0.0),
         "spacing": Case(F, {}, 8),
@@ -123,6 +149,7 @@ CASES: dict[str, dict[str, Case]] = {
         "chunk": Case(F, {}, 64),  # counts["dispatch_lanes"]
     },
     "checkerboard": {
+        **_blending(**SEQ),
         "cull_backfaces": Case(F, {}, True, **SEQ),
         "pattern": Case(F, {}, "2x1", **SEQ),
         "frame": Case(F, {}, 1, **SEQ),
@@ -133,8 +160,10 @@ CASES: dict[str, dict[str, Case]] = {
         "wave_size": Case(F, {}, 64, **SEQ),
     },
     "object_space": {
+        **_blending(**SEQ),
         "cull_backfaces": Case(F, {}, True, **SEQ),
         "store_shadels": Case(F, {}, SMALL_STORE, **SEQ),
+        "store_per_pixel": Case(F, {}, SMALL_STORE / (W * H), **SEQ),  # the same store
         "mip_bias": Case(F, {}, 1.0, **SEQ),
         # A store too small for the marked chunks: the bias is raised in these steps.
         "bias_step": Case(F, {"store_shadels": SMALL_STORE}, 1.0, **SEQ),
@@ -153,6 +182,20 @@ CASES: dict[str, dict[str, Case]] = {
         "shade_every": Case(F, {"reuse": False}, 2, **SEQ),
         "reuse": Case(F, {}, False, **SEQ),
         "wave_size": Case(F, {}, 64, **SEQ),
+        # Chunks left unshaded and a bias raised across frames, not retried within one.
+        "bias_feedback": Case(F, {"store_shadels": SMALL_STORE}, True, **SEQ),
+        "bias_low": Case(F, FEEDBACK, 0.05, **SEQ),  # under 1 chunk: the bias holds
+        "bias_relax": Case(F, FEEDBACK, 0.25, **SEQ),
+    },
+    "tads": {
+        "cull_backfaces": Case(F, {}, True, **SEQ),
+        "aniso_taps": Case(F, {}, 4, **SEQ),
+        "shade_every": Case(F, {}, 2, **SEQ),
+        # Taps of two ages in one pixel: the pan's in-between frames.
+        "staleness": Case(F, {"shade_every": 2}, 0.0, **SEQ),
+        "sheet_resolution": Case(F, {}, 16, **SEQ),
+        "texel_density": Case(F, {}, 16.0, **SEQ),  # the ground (untextured) is sized by it
+        "wave_size": Case(F, {}, 64, **SEQ),
     },
 }
 
@@ -170,8 +213,12 @@ NEUTRAL_IMAGE_ULPS = 4
 # (pipeline, params, field): a field set where the other fields leave it nothing to do; its
 # config must refuse it, naming it.
 REFUSED = [
+    ("deferred", {"oit": "weighted", "transparent_layers": 2}, "transparent_layers"),
+    ("forward", {"oit": "weighted", "sort_transparent": False}, "sort_transparent"),
     ("deferred", {"per_sample_shading": True}, "per_sample_shading"),
     ("visbuffer", {"vrs_rate": "1x2"}, "vrs_rate"),
+    ("visbuffer", {"batch_bits": 8}, "batch_bits"),
+    ("visbuffer", {"id_layout": "micro_batch", "instance_bits": 8}, "instance_bits"),
     ("visbuffer", {"vrs": "distance", "vrs_rate": "1x1"}, "vrs_rate"),
     ("visbuffer", {"vrs_thresholds": (1.0, 2.0)}, "vrs_thresholds"),
     ("visbuffer", {"vrs": "fixed", "vrs_thresholds": (1.0, 2.0)}, "vrs_thresholds"),
@@ -184,6 +231,11 @@ REFUSED = [
     ("object_space", {"sheet_resolution": 64, "max_sheet_resolution": 1024},
      "max_sheet_resolution"),
     ("object_space", {"sheet_resolution": 8192}, "sheet_resolution"),
+    ("object_space", {"bias_low": 0.5}, "bias_low"),
+    ("object_space", {"store_per_pixel": 2.0, "store_shadels": 4096}, "store_shadels"),
+    ("object_space", {"bias_relax": 0.125}, "bias_relax"),
+    ("tads", {"staleness": 0.5}, "staleness"),
+    ("tads", {"sheet_resolution": 64, "texel_density": 32.0}, "texel_density"),
 ]
 
 # Their neighbours that must stay valid: the same settings where they act, and the defaults
@@ -192,8 +244,10 @@ ACCEPTED = [
     ("deferred", {"per_sample_shading": True, "msaa": 2}),
     ("deferred", {"per_sample_shading": False, "msaa": 1}),
     ("visbuffer", {"vrs": "fixed", "vrs_rate": "1x2"}),
+    ("visbuffer", {"id_layout": "fixed", "batch_bits": 8, "instance_bits": 8}),
     ("visbuffer", {"vrs": "off", "vrs_rate": "2x2", "vrs_thresholds": (8, 20), "rate_image": ()}),
     ("visbuffer", {"vrs": "speed", "vrs_thresholds": (1.0, 2.0)}),
+    ("visbuffer", {"vrs": "motion", "vrs_thresholds": (1.0, 2.0)}),
     ("visbuffer", {"vrs": "image", "rate_image": (("2x2",),)}),
     ("dacs", {"width": 32, "height": 21, "border": "shade"}),
     ("dacs", {"width": 33, "height": 21, "border": "average"}),
@@ -202,6 +256,11 @@ ACCEPTED = [
     ("object_space", {"sheet_resolution": 0, "texel_density": 32.0, "max_sheet_resolution": 1024}),
     ("object_space", {"sheet_resolution": 64, "texel_density": 128.0}),
     ("object_space", {"sheet_resolution": 8192, "max_sheet_resolution": 8192}),
+    ("object_space", {"bias_feedback": True, "bias_low": 0.5, "bias_relax": 0.125}),
+    ("object_space", {"store_per_pixel": 2.0, "store_shadels": 0}),
+    ("object_space", {"bias_feedback": False, "bias_low": 0.8, "bias_relax": 0.0625}),
+    ("tads", {"shade_every": 2, "staleness": 0.5}),
+    ("tads", {"sheet_resolution": 64, "texel_density": 128.0}),
 ]
 
 

@@ -11,7 +11,7 @@ import pytest
 from jaxrender.metrics import psnr, to_display
 from jaxrender.pipelines import RenderConfig, get_pipeline, list_pipelines, make_config, program
 from jaxrender.pipelines.taa import from_ycocg, jitter_offsets, sample_history, to_ycocg
-from jaxrender.scene.camera_path import stack
+from jaxrender.scene.camera_path import pan, stack
 from jaxrender.shading import load_lit_scene
 from tests.pipelines.motion_scenes import sliding_scene
 
@@ -128,7 +128,45 @@ def test_changed_covers_every_taa_setting():
 @pytest.mark.parametrize("field", sorted(CHANGED))
 def test_each_taa_setting_changes_the_output(field):
     scene = load_lit_scene("spheres", rows=1, cols=2, lat=6, lon=12)
-    cams = stack([scene.camera] * 10)  # past 8 frames: 16 phases differ from 8
+    # A slow pan, past 8 frames (16 phases differ from 8): motion vectors exclude the jitter,
+    # so under a still camera the history is read at pixel centres, where every history
+    # filter returns the texel itself, and taa_history changes nothing there.
+    cams = pan(scene.camera, 10, pixels_per_frame=0.37, height=16)
     run = lambda **kw: np.asarray(get_pipeline("deferred").render_sequence(  # noqa: E731
         scene, cams, make_config("deferred", width=24, height=16, taa=True, **kw)).image)
     assert np.abs(run() - run(**{field: CHANGED[field]})).max() > 1e-4, field
+
+
+def test_taa_reuses_the_pipelines_visibility(name="deferred"):
+    # With the pipeline's buffer handed over the resolve rasterizes nothing of its own, and the
+    # frames equal those of a resolve that rasterizes the frame again (the same exact raster).
+    from jaxrender.pipelines.visibility import SHARED_VISIBILITY
+
+    scene = sliding_scene()
+    pipe = get_pipeline(name)
+    cfg = make_config(name, width=W, height=H, taa=True)
+    hidden = dataclasses.replace(pipe, step=_without_shared_visibility(pipe.step))
+    cams = stack([scene.camera] * 3)
+    shared, own = pipe.render_sequence(scene, cams, cfg), hidden.render_sequence(scene, cams, cfg)
+    for t in range(3):
+        np.testing.assert_array_equal(np.asarray(shared.image[t]), np.asarray(own.image[t]),
+                                      err_msg=f"{name}: frame {t} differs with the shared buffer")
+    assert SHARED_VISIBILITY not in shared.aux, "the shared buffer must not leave the program"
+
+    def rasterizations(p):
+        lowered, _ = program.lower(p, scene, cams, cfg, sequence=True)
+        return lowered.as_text().count("_rasterize_impl")
+
+    assert rasterizations(pipe) < rasterizations(hidden), \
+        f"{name} with TAA still rasterizes the frame a second time"
+
+
+def _without_shared_visibility(step):
+    from jaxrender.pipelines.visibility import SHARED_VISIBILITY
+
+    def hidden(scene, static, state, camera, t, cfg):
+        frame, state = step(scene, static, state, camera, t, cfg)
+        aux = {k: v for k, v in frame.aux.items() if k != SHARED_VISIBILITY}
+        return dataclasses.replace(frame, aux=aux), state
+
+    return hidden

@@ -36,7 +36,7 @@ def test_id_round_trip_and_overflow_refused():
 
 def test_ids_in_the_frame_decode_to_the_triangles():
     scene = make_scene([rect_part(0, 0, 4, 4, 2.0), rect_part(2, 2, 6, 6, 4.0)])
-    f = render(scene)
+    f = render(scene, id_layout="fixed")
     tri = np.asarray(decode(scene, f.aux["ids"], IdLayout()))
     assert set(np.unique(tri).tolist()) == {-1, 0, 1, 2, 3}
     assert int((tri >= 0).sum()) == 28
@@ -57,8 +57,8 @@ def test_an_id_field_overflow_is_counted():
 
 def test_vrs_2x2_shades_a_quarter_and_broadcasts():
     scene = make_scene([rect_part(0, 0, W, H, 3.0, tilt=0.5)])
-    full = render(scene)
-    f = render(scene, vrs="fixed", vrs_rate="2x2")
+    full = render(scene, tiling="tiles")
+    f = render(scene, vrs="fixed", vrs_rate="2x2", tiling="tiles")
     assert int(full.counts["shade_invocations"]) == W * H
     assert int(f.counts["shade_invocations"]) == W * H // 4
     img = np.asarray(f.image)

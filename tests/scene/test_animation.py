@@ -139,3 +139,80 @@ def test_toml_fps_needs_a_motion(tmp_path):
 def test_mesh_part_motion_survives_transforms():
     part = MeshPart(np.zeros((3, 3)), np.array([[0, 1, 2]]), motion=ObjectMotion(velocity=(1, 0, 0)))
     assert part.transformed(np.eye(4)).motion == part.motion
+
+
+def _posed_frames_oracle(motions, positions, normals, tangents, vertex_object, t, eps=1e-3):
+    """Normals cof(J) n = det(J) J^-T n (what a deformed triangle's e1 x e2 becomes: the normal
+    keeps the side its winding gives, even where the sway folds the surface) and tangents J t,
+    normalized, with J the central-difference Jacobian of each vertex's posed position over
+    its rest position (float64, from pose_arrays itself)."""
+    from jaxrender.scene.animation import build_animation, pose_arrays
+
+    def posed(p):
+        anim = build_animation(motions, p, normals, tangents, vertex_object)
+        return np.asarray(pose_arrays(anim, t)[0], np.float64)
+
+    cols = [(posed(positions + eps * e) - posed(positions - eps * e)) / (2 * eps)
+            for e in np.eye(3)]
+    jac = np.stack(cols, axis=-1)  # [V, 3, 3], d x / d p
+    n = np.linalg.det(jac)[:, None] * np.einsum("vji,vj->vi", np.linalg.inv(jac), normals)
+    tg = np.einsum("vij,vj->vi", jac, tangents[:, :3])
+    unit = lambda v: v / np.linalg.norm(v, axis=-1, keepdims=True)  # noqa: E731
+    return unit(n), unit(tg)
+
+
+@pytest.mark.parametrize("rigid", [False, True], ids=["sway", "sway+spin"])
+def test_swayed_normals_and_tangents_follow_the_bent_surface(rigid):
+    from jaxrender.scene.animation import build_animation, pose_arrays
+
+    rng = np.random.default_rng(7 + rigid)
+    v = 64
+    pos = rng.uniform([-1.0, 0.1, -1.0], [1.0, 1.5, 1.0], (v, 3))
+    nrm = rng.normal(size=(v, 3))
+    nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
+    tan = np.cross(nrm, rng.normal(size=(v, 3)))
+    tan = np.concatenate([tan / np.linalg.norm(tan, axis=-1, keepdims=True),
+                          np.ones((v, 1))], axis=-1)
+    obj = (np.arange(v) % 2).astype(np.int32)
+    motions = [ObjectMotion(sway_amplitude=0.3, sway_direction=(1.0, 0.0, 0.5),
+                            sway_frequency_hz=1.3, sway_wavelength=2.0, sway_height=1.2,
+                            sway_exponent=2.0, sway_base=0.0,
+                            spin_deg_per_s=40.0 if rigid else 0.0, spin_axis=(0, 1, 1),
+                            pivot=(0.0, 0.0, 0.0)),
+               ObjectMotion(sway_amplitude=0.15, sway_direction=(0.0, 0.0, 1.0),
+                            sway_exponent=1.5, sway_base=0.0, pivot=(0.0, 0.0, 0.0))]
+    t = 13
+    anim = build_animation(motions, pos, nrm, tan, obj)
+    _, got_n, got_t = (np.asarray(a, np.float64) for a in pose_arrays(anim, t))
+    want_n, want_t = _posed_frames_oracle(motions, pos, nrm, tan, obj, t)
+    assert not np.allclose(want_n, nrm, atol=1e-2), "the sway does not bend these normals"
+    np.testing.assert_allclose(got_n, want_n, atol=2e-3,
+                               err_msg="swayed normals are not cof(J) n of the posed surface")
+    np.testing.assert_allclose(got_t[:, :3], want_t, atol=2e-3,
+                               err_msg="swayed tangents are not J t of the posed surface")
+    np.testing.assert_array_equal(got_t[:, 3], tan[:, 3], err_msg="tangent sign changed")
+
+
+def test_bounds_hold_every_pose_of_a_spinning_orbiting_swaying_scene():
+    # The shadow map's light box is the scene's bounds: every pose must lie inside them.
+    from jaxrender.scene.animation import pose_arrays
+
+    cube = box((1.0, 0.5, 0.25))
+    cube.positions = cube.positions + np.array([2.0, 0.0, 0.0])
+    cube.motion = ObjectMotion(spin_axis=(0, 0, 1), spin_deg_per_s=50.0, orbit_center=(0, 0, 0),
+                               orbit_axis=(0, 1, 0), orbit_deg_per_s=35.0)
+    card = grid_plane((1.0, 1.0), (1, 4)).transformed(
+        np.array([[1, 0, 0, -2.0], [0, 0, -1, 0.5], [0, 1, 0, 0], [0, 0, 0, 1.0]]))
+    card.motion = ObjectMotion(sway_amplitude=0.4, sway_height=1.0, sway_base=0.0)
+    still = grid_plane((1, 1))
+    scene = _scene(still, cube, card, fps=10.0)
+    lo, hi = (np.asarray(b, np.float64) for b in scene.bounds)
+    rest = np.asarray(scene.positions, np.float64)
+    posed = np.concatenate([np.asarray(pose_arrays(scene.animation, t)[0], np.float64)
+                            for t in range(0, 200, 3)])
+    assert np.all(posed >= lo - 1e-5) and np.all(posed <= hi + 1e-5), (
+        f"a pose leaves the bounds {lo} .. {hi}: {posed.min(0)} .. {posed.max(0)}")
+    assert np.any(posed.min(0) < rest.min(0) - 0.1), "the motion never leaves the rest box"
+    np.testing.assert_array_equal(np.asarray(_scene(still).bounds),
+                                  np.stack([rest[:4].min(0), rest[:4].max(0)]).astype(np.float32),
+                                  err_msg="a still scene's bounds are not its rest box")

@@ -11,7 +11,7 @@ from jaxrender.scene.builtin import many_small
 from jaxrender.scene.camera_path import dolly, frame, jitter, orbit, pan
 
 NAMES = ["stripes", "spheres", "foliage", "thin", "terrain", "sliver", "room", "many_small",
-         "foliage_wind", "spheres_spin"]
+         "foliage_wind", "spheres_spin", "grass", "glass"]
 
 
 def test_every_builtin_loads():

@@ -80,7 +80,8 @@ def test_lod_on_tilted_plane_matches_analytic_derivative():
 
 
 _SMALL = {"many_small": dict(n_triangles=4000), "terrain": dict(res=32),
-          "spheres": dict(rows=2, cols=3), "foliage": dict(n_cards=60)}
+          "spheres": dict(rows=2, cols=3), "foliage": dict(n_cards=60),
+          "grass": dict(n_blades=500)}
 
 
 def test_every_builtin_renders_without_nan():

@@ -89,6 +89,8 @@ def render_flat(scene, camera, cfg: FlatConfig) -> Frame:
         "shaded": level == 0,
         "chunk_state": ((ix[:, :: 8] // 8 + iy[:: 8, :] // 8) % 3).astype(jnp.int32),
         "mip_level": (ix.astype(jnp.float32) / w + iy.astype(jnp.float32) / h),
+        "sample_class": level - 1,  # tads's map: -1 uncovered, 0-4 texels shaded
+        "duplicates": (level == 3).astype(jnp.int32),
     }
     return Frame(img, counts, aux)
 

@@ -10,7 +10,8 @@ from jaxrender.study.schema import load_study
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDIES = sorted((ROOT / "studies").glob("*.toml"))
-PIPELINE_TYPES = {"forward", "deferred", "visbuffer", "checkerboard", "dacs", "object_space"}
+PIPELINE_TYPES = {"forward", "deferred", "visbuffer", "checkerboard", "dacs", "object_space",
+                  "tads"}
 
 
 def test_all_bundled_studies_exist():

@@ -9,7 +9,7 @@ import jax
 import numpy as np
 import pytest
 
-from jaxrender.study import backend, compile_cache, compile_pool, programs
+from jaxrender.study import backend, compile_cache, compile_pool, executables, programs
 from tests.study import doubles
 from jaxrender.study.schema import load_study
 
@@ -107,6 +107,7 @@ def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog, pers
     # code on the way: the frames below would not compute).
     previous = jax.config.values["jax_compilation_cache_dir"]
     monkeypatch.setenv(compile_cache.ENV_OFF, "1" if persistent_cache else "0")
+    monkeypatch.setenv(executables.ENV_STORE, "1")
     if persistent_cache:
         compile_cache.enable(tmp_path / "xla")
     else:
@@ -189,3 +190,28 @@ def test_real_object_space(tmp_path, monkeypatch):
     assert all(c.compile_ms > 0 for c in procs.values())
     _assert_bitwise(_frames(*plan, threads), _frames(*plan, procs))
     _assert_bitwise(ref_t, ref_p)
+
+
+def test_cpu_compiles_in_the_calling_thread(tiny_study, tmp_path, monkeypatch):
+    # XLA:CPU crashed when it compiled or serialized in one thread while others compiled or
+    # ran programs: on the CPU backend without worker processes nothing compiles elsewhere.
+    import threading
+
+    assert jax.default_backend() == "cpu"
+    monkeypatch.setattr(backend, "load_scene", FakeLoader())
+    plan = _plan(tiny_study)
+    seen = []
+    real = programs.compile_variant
+
+    def spy(*args, **kwargs):
+        seen.append(threading.get_ident())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(programs, "compile_variant", spy)
+    out, _ = _compile(monkeypatch, "0", plan, tmp_path)
+    assert out.keys() == _keys(plan)
+    assert seen and set(seen) == {threading.get_ident()}, "compiled in another thread"
+    assert programs.compile_workers() == 1
+    monkeypatch.setenv(compile_pool.ENV, "1")
+    assert not programs.compiles_in_caller()
+    assert programs.compile_workers() == programs.COMPILE_WORKERS

@@ -6,6 +6,8 @@ loaded is never stored."""
 import json
 import logging
 import re
+import threading
+import time
 
 import jax
 import jax.numpy as jnp
@@ -20,6 +22,12 @@ from jaxrender.study.runner import run_study
 from jaxrender.study.schema import load_study
 from jaxrender.types import Frame
 from tests.study import doubles
+
+@pytest.fixture(autouse=True)
+def store_on(monkeypatch):
+    """The store is off by default on the CPU backend: these tests turn it on."""
+    monkeypatch.setenv(executables.ENV_STORE, "1")
+
 
 def _what(rows):
     """The rows without the columns that say how fast and how the program was obtained."""
@@ -208,3 +216,53 @@ def test_a_pipeline_is_keyed_by_the_file_defining_it():
                                        cfg, sequence=True)
     assert executables.program_key(PIPE, fixed, args) != executables.program_key(
         elsewhere, (elsewhere,) + fixed[1:], args)
+
+
+def test_deferred_stores_write_when_the_block_ends(store):
+    cfg = registry.RenderConfig(width=12, height=3)
+    with executables.deferred_stores():
+        comp, n, image = _compile(cfg)
+        assert n["compiled"] == 1 and not list(store.glob(f"*{executables.SUFFIX}")), \
+            "stored inside the block, beside compiles in other threads"
+    assert len(list(store.glob(f"*{executables.SUFFIX}"))) == 1, "not stored at the block's end"
+    jax.clear_caches()
+    comp, n, image = _compile(cfg)
+    assert n["loaded"] == 1 and comp.method == "stored", n
+    np.testing.assert_array_equal(image, _expected(cfg), err_msg="deferred, then loaded")
+
+
+def test_an_exclusive_hold_waits_for_shared_ones_and_goes_first():
+    guard, order = executables.SharedExclusive(), []
+
+    def exclusive():
+        with guard.exclusive():
+            order.append("exclusive")
+
+    def late_shared():
+        with guard.shared():
+            order.append("late shared")
+
+    with guard.shared():
+        writer = threading.Thread(target=exclusive)
+        writer.start()
+        while guard.waiting() == 0:  # the exclusive hold is queued behind this shared one
+            time.sleep(0.001)
+        reader = threading.Thread(target=late_shared)
+        reader.start()
+        time.sleep(0.05)
+        assert order == [], f"entered beside a shared hold: {order}"
+        order.append("first shared released")
+    writer.join(5)
+    reader.join(5)
+    assert order == ["first shared released", "exclusive", "late shared"], order
+
+
+@pytest.mark.parametrize("value, on", [(None, False), ("1", True), ("0", False), ("off", False)])
+def test_off_by_default_on_the_cpu_backend(monkeypatch, value, on):
+    assert jax.default_backend() == "cpu"
+    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    if value is None:
+        monkeypatch.delenv(executables.ENV_STORE, raising=False)
+    else:
+        monkeypatch.setenv(executables.ENV_STORE, value)
+    assert executables.enabled() is on, f"{executables.ENV_STORE}={value}"

@@ -49,3 +49,22 @@ def test_new_metrics_are_selectable_but_not_default():
     assert "mean_flip" not in metrics.DEFAULT_METRICS
     assert "temporal_error" in metrics.DEFAULT_METRICS
     assert Study.__dataclass_fields__["metrics"].default == metrics.DEFAULT_METRICS
+
+
+def test_warp_error_test_is_finite_where_the_reference_stands_still(rng):
+    # A still reference: its own warping error is 0, so the relative warp_error is +inf for a
+    # flickering test; warp_error_test is the test's own error, the numerator of that ratio.
+    ref = np.repeat(rng.uniform(0.1, 0.9, (1, H, W, 3)).astype(np.float32), T, axis=0)
+    test = np.clip(ref + rng.normal(0, 0.05, ref.shape), 0, 1).astype(np.float32)
+    ys, xs = np.mgrid[0:H, 0:W].astype(np.float32) + 0.5  # pixel centres
+    still = np.broadcast_to(np.stack([xs, ys], -1), (T - 1, H, W, 2)).copy()
+    motion = Reprojection(still, np.ones((T - 1, H, W), bool), np.zeros((T - 1, H, W),
+                                                                         np.float32))
+    got, _ = backend.sequence_metrics(test, ref, ["warp_error", "warp_error_test"], motion)
+    want = warp_error(metrics.to_display(test), metrics.to_display(ref), motion)
+    assert got["warp_error"] == np.inf, got
+    assert float(want.reference) == 0.0, "the still reference changed"
+    np.testing.assert_allclose(got["warp_error_test"], float(want.test), rtol=1e-6,
+                               err_msg="warp_error_test is not the test's warping error")
+    assert np.isfinite(got["warp_error_test"]) and got["warp_error_test"] > 0.0
+    assert "warp_error_test" not in metrics.DEFAULT_METRICS

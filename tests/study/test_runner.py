@@ -52,7 +52,7 @@ def test_end_to_end(tiny_study, tmp_path):
     figs = sorted(p.name for p in (out / "figures").glob("*.png"))
     for prefix in ("image_grid__tiny__", "pareto_time__tiny", "pareto_count__tiny",
                    "temporal__tiny__", "dacs_decisions__", "object_space_marking__",
-                   "visbuffer_waves__tiny", "summary_table"):
+                   "tads_samples__", "visbuffer_waves__tiny", "summary_table"):
         assert any(f.startswith(prefix) for f in figs), prefix
     assert len(list((out / "figures").glob("*.pdf"))) == len(figs)
     assert any("PSNR" in line for line in logs)  # the summary table

@@ -8,7 +8,7 @@ import dataclasses
 from jaxrender.figures import render_figures
 from jaxrender.study import load_study, run_study, time_series
 
-COSTS = (0, 4)
+COSTS = (0, 16)
 PIPELINES = ("deferred", "checkerboard")
 
 
@@ -25,7 +25,7 @@ def _tiny(study):
 def test_time_follows_work_tiny(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "cache"))
     full = load_study("time_follows_work")
-    assert {dict(v.params)["shader_cost"] for v in full.variants} == {0, 4, 16, 64, 256}
+    assert {dict(v.params)["shader_cost"] for v in full.variants} == {0, 16, 64, 256, 1024}
     assert {p.type for p in full.pipelines} >= {"deferred", "checkerboard", "dacs",
                                                 "object_space", "visbuffer", "forward"}
     study = _tiny(full)
@@ -36,7 +36,7 @@ def test_time_follows_work_tiny(tmp_path, monkeypatch):
         assert r["shading_work"] == r["shade_invocations"] * (1 + r["shader_cost"]), r
     by_cost = {(r["pipeline"], r["shader_cost"]): r for r in res.rows}
     for p in PIPELINES:  # the cost changes the work per point, not the points shaded
-        assert by_cost[p, 0]["shade_invocations"] == by_cost[p, 4]["shade_invocations"], p
+        assert by_cost[p, 0]["shade_invocations"] == by_cost[p, 16]["shade_invocations"], p
     assert [(s.pipeline, s.costs) for s in res.time_fits] == [
         ("checkerboard", COSTS), ("deferred", COSTS)]
     with open(tmp_path / "out" / "time_fits.csv", newline="") as f:

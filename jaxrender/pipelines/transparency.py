@@ -1,0 +1,349 @@
+"""The transparent pass: blended surfaces composited over a pipeline's opaque result.
+
+Deferred, visibility-buffer, checkerboard and DACS shading hold one surface per pixel, so, as
+engines do, they resolve the opaque surfaces first and then run a forward pass over the
+transparent ones (``transparent_pass``); forward shades the transparent fragments in its own
+main pass and composites them here (``composite``); the reference does both per sub-sample.
+
+Plan: the transparent triangles' fragment list (the opaque triangles made degenerate, so ids
+stay the scene's), every fragment strictly in front of the opaque depth of its pixel. Shade:
+those fragments, compacted into one work list, through the shared ``shade()`` plus the
+material's ``opacity`` (``layer_shader``). Reconstruct, by ``oit``:
+
+- "sorted": the exact per-pixel sort of the fragment list, back to front (or, for forward's
+  ``sort_transparent = false``, in submission order), blended into a k-buffer of static depth
+  ``transparent_layers`` per pixel: a pass blends each pixel's next ``transparent_layers``
+  layers, back to front, over the image so far (over: c = a s + (1 - a) c; additive:
+  c = c + a s). A pixel with more layers runs further passes (``transparent_overflow =
+  "chunks"``, the same image as a deeper buffer) or the frame is refused naming the cap
+  ("error"); a layer is never dropped.
+- "weighted": weighted blended OIT (McGuire and Bavoil 2013, eq. 7 weights): no sort;
+  c = sum(w a s) / sum(w a) (1 - prod(1 - a)) + prod(1 - a) c0, w = a max(1e-2, min(3e3,
+  10 / (1e-5 + (z/5)^2 + (z/200)^6))), z the view depth; additive layers are added
+  unattenuated (the order-independent approximation of their attenuation).
+
+Counts from the work: ``transparent_invocations`` (fragments shaded), ``transparent_layers_mean``
+(over the pixels with a layer) and ``_max``, ``transparent_passes``, ``transparent_bytes``
+(each layer's k-buffer entry written and read). A scene without the transparency effect
+compiles none of this.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+import jaxrender.pipelines.dispatch as dispatch
+from jaxrender.pipelines.base import BLENDING_DEFAULTS
+from jaxrender.pipelines.quads import first_of_segment_index, segment_starts
+from jaxrender.pipelines.visibility import (clip_vertices, faces_where, is_transparent, points_at,
+                                            raster_fragments)
+from jaxrender.raster.fragments import collect_fragments
+from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity
+from jaxrender.raster.resolve import pair_barycentrics
+from jaxrender.raster.setup import SUBPIXEL_BITS
+from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
+from jaxrender.shading import opacity, shade, surface_points
+from jaxrender.sorting import lex_sort
+from jaxrender.types import Array
+
+LAYER_BYTES = 20  # a k-buffer entry: premultiplied RGB and transmittance (4 float32), a depth
+ONE_BITS = 0x3F800000  # float32 1.0: window depths in [0, 1] order as these integer bits
+LAYER_CHANNELS = 5  # rgb radiance, opacity, view depth
+ORDERS = ("depth", "submission")
+
+
+class BlendSettings(NamedTuple):
+    """oit ("sorted" | "weighted"), layers (k-buffer depth), overflow ("chunks" | "error"),
+    order ("depth": back to front; "submission": draw order, forward unsorted)."""
+
+    oit: str = "sorted"
+    layers: int = 8
+    overflow: str = "chunks"
+    order: str = "depth"
+
+
+def settings_of(cfg) -> BlendSettings:
+    order = "depth" if getattr(cfg, "sort_transparent", True) else "submission"
+    return BlendSettings(getattr(cfg, "oit", "sorted"), int(getattr(cfg, "transparent_layers", 8)),
+                         getattr(cfg, "transparent_overflow", "chunks"), order)
+
+
+def check_settings(scene, cfg) -> None:
+    """Nothing accepted and ignored: blending settings need a scene that blends."""
+    if scene.effects.transparency:
+        return
+    for key, default in dict(BLENDING_DEFAULTS, sort_transparent=True).items():
+        if getattr(cfg, key, default) != default:
+            raise ValueError(f"{key} has no effect: scene {scene.name!r} has no transparent "
+                             f"material (effects.transparency is off)")
+
+
+def refuse_transparency(scene, pipeline: str) -> None:
+    """For a pipeline (or a setting) that cannot blend: refuse a scene that does, loudly."""
+    if scene.effects.transparency:
+        raise ValueError(f"{pipeline} does not render transparent surfaces yet; scene "
+                         f"{scene.name!r} has blended materials (effects.transparency)")
+
+
+def layer_shader(scene, camera):
+    """points -> float32[N, 5]: the shared ``shade()`` radiance, the opacity, the view depth."""
+    def fn(points):
+        rgb = shade(points, scene)
+        a = opacity(points, scene)
+        z = jnp.sum((points.position - camera.eye[None, :]) * camera.forward[None, :], axis=-1)
+        return jnp.concatenate([rgb, a[:, None], z[:, None]], axis=-1)
+
+    return fn
+
+
+class Layers(NamedTuple):
+    """Transparent fragments of one sample: pixel, tri, depth int32/float32[F]; front bool[F]
+    (in front of the opaque depth: the ones shaded and blended); values float32[F, 5]
+    (``layer_shader``'s, valid where front)."""
+
+    pixel: Array
+    tri: Array
+    depth: Array
+    front: Array
+    values: Array
+
+
+def in_front(fr, opaque_depth: Array, n_pix: int) -> Array:
+    """bool[F]: listed fragments strictly in front of the opaque depth float32[P] (GL_LESS
+    against the opaque pass's depth buffer, no depth write)."""
+    z = opaque_depth.at[jnp.where(fr.valid, fr.pixel, n_pix)].get(mode="fill", fill_value=0.0)
+    return fr.valid & (fr.depth < z)
+
+
+def transparent_fragments(scene, clip, cfg, sample_offset=(0.5, 0.5)):
+    """The fragment list of the transparent triangles alone (``raster_fragments``)."""
+    faces = faces_where(scene, is_transparent(scene, jnp.arange(scene.num_triangles)))
+    return raster_fragments(clip, faces, cfg, cull_backfaces=bool(cfg.cull_backfaces),
+                            sample_offset=sample_offset)
+
+
+def shade_layers(scene, camera, fr, front, points_of, chunk: int):
+    """Shade the front fragments (one compacted work list). Returns (Layers, WorkList)."""
+    values = jnp.zeros((front.shape[0], LAYER_CHANNELS), jnp.float32)
+    values, work = dispatch.shade(dispatch.WorkList.of(front), points_of,
+                                  layer_shader(scene, camera), values, chunk)
+    return Layers(fr.pixel, fr.tri, fr.depth, front, values), work
+
+
+def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
+    """The forward transparent pass after an opaque resolve: image float32[H, W, 3] and its
+    depth float32[H, W] (1 where empty) -> (image, counts to merge with ``merge_counts``).
+    Returns the image unchanged and no counts for a scene without transparency."""
+    check_settings(scene, cfg)
+    if not scene.effects.transparency:
+        return image, {}
+    h, w = image.shape[:2]
+    with jax.named_scope("transparent"):
+        clip = clip_vertices(scene, camera, cfg)
+        fr = transparent_fragments(scene, clip, cfg)
+        front = in_front(fr, opaque_depth.reshape(-1), w * h)
+
+        def points_of(items):
+            return points_at(scene, camera, clip, cfg, fr.tri[items], fr.pixel[items])
+
+        layers, work = shade_layers(scene, camera, fr, front, points_of, cfg.chunk)
+        out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
+    counts["transparent_invocations"] = work.invocations
+    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
+    return out.reshape(h, w, 3), counts
+
+
+def merge_counts(counts: dict, transparent: dict) -> dict:
+    """A pipeline's counts with its transparent pass's: the shading and bytes added to
+    ``shade_invocations`` and ``bytes_intermediate``, the overflows summed."""
+    if not transparent:
+        return counts
+    out = dict(counts, **{k: v for k, v in transparent.items() if k != "overflow"})
+    out["shade_invocations"] = counts["shade_invocations"] + transparent["transparent_invocations"]
+    out["bytes_intermediate"] = counts["bytes_intermediate"] + transparent["transparent_bytes"]
+    out["overflow"] = counts.get("overflow", jnp.int32(0)) + transparent["overflow"]
+    return out
+
+
+# ---------------------------------------------------------------- composite
+
+
+def blend_factors(scene, layers: Layers) -> tuple[Array, Array, Array]:
+    """(premultiplied colour a s float32[F, 3], transmittance float32[F]: 1 - a for over, 1 for
+    additive, opacity float32[F])."""
+    mode = scene.materials.blend[scene.tri_material[jnp.maximum(layers.tri, 0)]]
+    a = jnp.clip(layers.values[:, 3], 0.0, 1.0)
+    premult = layers.values[:, :3] * a[:, None]
+    trans = jnp.where(mode == BLEND_OVER, 1.0 - a, 1.0)
+    return premult, trans, a
+
+
+def composite(scene, layers: Layers, background: Array, settings: BlendSettings):
+    """Blend the front layers over background float32[P, 3]. Returns (image float32[P, 3],
+    counts: transparent_layers_mean/_max, transparent_passes, transparent_bytes, overflow)."""
+    n_pix = background.shape[0]
+    per_pixel = jnp.zeros((n_pix,), jnp.int32).at[
+        jnp.where(layers.front, layers.pixel, n_pix)].add(1, mode="drop")
+    n_front = jnp.sum(per_pixel)
+    with_layer = jnp.sum(per_pixel > 0, dtype=jnp.int32)
+    if settings.oit == "weighted":
+        image = weighted_composite(scene, layers, background)
+        passes, overflow = jnp.int32(0), jnp.int32(0)
+    else:
+        image, passes, overflow = sorted_composite(scene, layers, background, per_pixel, settings)
+    counts = {
+        "transparent_fragments": n_front,
+        "transparent_layers_mean": n_front.astype(jnp.float32)
+        / jnp.maximum(with_layer, 1).astype(jnp.float32),
+        "transparent_layers_max": jnp.max(per_pixel),
+        "transparent_passes": passes,
+        "transparent_bytes": n_front * (2 * LAYER_BYTES),
+        "overflow": overflow,
+    }
+    return image, counts
+
+
+def sorted_composite(scene, layers: Layers, background, per_pixel, settings: BlendSettings):
+    """Exact: each pixel's layers in order (farthest first, or first submitted first), blended
+    in passes of ``settings.layers``. Returns (image, passes, overflow)."""
+    n_pix, cap = background.shape[0], settings.layers
+    premult, trans, _ = blend_factors(scene, layers)
+    if settings.order == "depth":
+        bits = jax.lax.bitcast_convert_type(jnp.clip(layers.depth, 0.0, 1.0), jnp.int32)
+        order, limit = ONE_BITS - bits, ONE_BITS  # far first
+    else:
+        order, limit = layers.tri, scene.num_triangles - 1  # first drawn first
+    key = jnp.where(layers.front, layers.pixel, n_pix)  # out of range: sorts last
+    (pix, _), (premult, trans) = lex_sort((key, order), (n_pix - 1, limit), (premult, trans))
+    live = pix < n_pix
+    rank = jnp.arange(pix.shape[0], dtype=jnp.int32) - first_of_segment_index(segment_starts(pix))
+    deepest = jnp.max(per_pixel)
+    if settings.overflow == "chunks":
+        passes, overflow = (deepest + cap - 1) // cap, jnp.int32(0)
+    else:
+        passes = jnp.minimum(deepest, 1)
+        overflow = (deepest > cap).astype(jnp.int32)
+
+    def one_pass(k, image):
+        slot = rank - k * cap
+        inside = live & (slot >= 0) & (slot < cap)
+        dest = jnp.where(inside, pix * cap + slot, n_pix * cap)
+        buf_c = jnp.zeros((n_pix * cap, 3), jnp.float32).at[dest].set(premult, mode="drop")
+        buf_t = jnp.ones((n_pix * cap,), jnp.float32).at[dest].set(trans, mode="drop")
+        buf_c, buf_t = buf_c.reshape(n_pix, cap, 3), buf_t.reshape(n_pix, cap)
+
+        def blend(slot_i, img):  # back to front inside the pass: slot 0 is the farthest
+            return buf_c[:, slot_i] + buf_t[:, slot_i, None] * img
+
+        return jax.lax.fori_loop(0, cap, blend, image)
+
+    with jax.named_scope("sorted_blend"):
+        image = jax.lax.fori_loop(0, passes, one_pass, background)
+    return image, passes.astype(jnp.int32), overflow
+
+
+def wboit_weight(alpha: Array, view_z: Array) -> Array:
+    """McGuire and Bavoil (2013), eq. 7: w(z, a) = a max(1e-2, min(3e3, 10 / (1e-5 + (|z|/5)^2
+    + (|z|/200)^6)))."""
+    z = jnp.abs(view_z)
+    d = 10.0 / (1e-5 + jnp.square(z / 5.0) + (z / 200.0) ** 6)
+    return alpha * jnp.clip(d, 1e-2, 3e3)
+
+
+def weighted_composite(scene, layers: Layers, background) -> Array:
+    """Weighted blended OIT of the front layers (see the module docstring)."""
+    n_pix = background.shape[0]
+    premult, _, a = blend_factors(scene, layers)
+    mode = scene.materials.blend[scene.tri_material[jnp.maximum(layers.tri, 0)]]
+    over = layers.front & (mode == BLEND_OVER)
+    add = layers.front & (mode == BLEND_ADDITIVE)
+    w = wboit_weight(a, layers.values[:, 4])
+    at_over = jnp.where(over, layers.pixel, n_pix)
+    accum = jnp.zeros((n_pix, 3), jnp.float32).at[at_over].add(premult * w[:, None], mode="drop")
+    weight = jnp.zeros((n_pix,), jnp.float32).at[at_over].add(a * w, mode="drop")
+    reveal = jnp.ones((n_pix,), jnp.float32).at[at_over].multiply(1.0 - a, mode="drop")
+    glow = jnp.zeros((n_pix, 3), jnp.float32).at[jnp.where(add, layers.pixel, n_pix)].add(
+        premult, mode="drop")
+    mean = accum / jnp.maximum(weight, 1e-5)[:, None]
+    return mean * (1.0 - reveal)[:, None] + reveal[:, None] * background + glow
+
+
+__all__ = ["BlendSettings", "check_settings", "composite", "forward_blend", "forward_front",
+           "forward_split", "in_front", "LAYER_BYTES", "layer_shader", "Layers", "merge_counts",
+           "refuse_transparency", "sample_pass", "settings_of", "shade_layers",
+           "sorted_composite", "transparent_fragments", "transparent_pass", "wboit_weight",
+           "weighted_composite"]
+
+
+# ---------------------------------------------------------------- forward's main pass
+
+
+def forward_split(scene, draw, cfg):
+    """(forward's draw list without its transparent fragments, bool[F] the transparent
+    fragments), or (draw, None) for a scene without transparency."""
+    check_settings(scene, cfg)
+    if not scene.effects.transparency:
+        return draw, None
+    if draw.samples > 1 or cfg.shade_helpers:
+        refuse_transparency(scene, "forward with msaa > 1 or shade_helpers")
+    transparent = is_transparent(scene, draw.tri) & draw.valid
+    return draw._replace(valid=draw.valid & ~transparent), transparent
+
+
+def forward_front(draw, transparent, keep, cfg):
+    """bool[F]: the transparent fragments in front of the final opaque depth of their pixel
+    (drawn after the opaque ones, as engines order them), or None."""
+    if transparent is None:
+        return None
+    n_pix = cfg.width * cfg.height
+    z = jnp.full((n_pix,), jnp.inf).at[draw.slot].min(jnp.where(keep, draw.depth, jnp.inf),
+                                                       mode="drop")
+    return transparent & (draw.depth < z.at[draw.slot].get(mode="fill", fill_value=-jnp.inf))
+
+
+def forward_blend(scene, draw, front, values, image, counts: dict, cfg):
+    """Blend forward's shaded transparent units (``values`` from its main pass) over its opaque
+    image; their shading is already in ``shade_invocations``. Returns (image, counts)."""
+    if front is None:
+        return image, counts
+    h, w = image.shape[:2]
+    layers = Layers(draw.pixel, draw.tri, draw.depth, front, values)
+    with jax.named_scope("transparent"):
+        out, extra = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
+    counts = dict(counts, **{k: v for k, v in extra.items() if k != "overflow"},
+                  transparent_invocations=jnp.sum(front, dtype=jnp.int32))
+    counts["bytes_intermediate"] = counts["bytes_intermediate"] + extra["transparent_bytes"]
+    counts["overflow"] = counts["overflow"] + extra["overflow"]
+    return out.reshape(h, w, 3), counts
+
+
+# ---------------------------------------------------------------- the reference, per sample
+
+
+def sample_pass(scene, camera, clip, offset: Array, opaque_depth: Array, rgb: Array,
+                deriv_scale: Array, cfg):
+    """The exact transparent pass at one sub-sample: ``offset`` int32[2] fixed point (traced),
+    the sample's opaque depth float32[P] and colour float32[P, 3]; texture footprints scaled
+    by ``deriv_scale`` (1/k). Every layer sorted, any number of layers (passes of
+    DEFAULT_LAYERS). Returns (rgb, counts)."""
+    w, h = cfg.width, cfg.height
+    n_tris = scene.num_triangles
+    faces = faces_where(scene, is_transparent(scene, jnp.arange(n_tris)))
+    fr = collect_fragments(clip, faces, w, h, 4 * w * h, False, offset,
+                           default_work_capacity(n_tris, w, h), default_clip_capacity(n_tris))
+    front = in_front(fr, opaque_depth, w * h)
+    off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
+
+    def points_of(items):
+        t, p = fr.tri[items], fr.pixel[items]
+        b, dx, dy = pair_barycentrics(clip, scene.faces, t, p % w, p // w, w, h, off_px)
+        return surface_points(scene, camera, t, b, dx * deriv_scale, dy * deriv_scale)
+
+    layers, work = shade_layers(scene, camera, fr, front, points_of, cfg.chunk or w * h)
+    out, counts = composite(scene, layers, rgb, BlendSettings())
+    counts["transparent_invocations"] = work.invocations
+    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
+    return out, counts
