@@ -30,3 +30,20 @@ def rng(request):
     # draw other inputs on purpose (CI runs the default).
     extra = int(os.environ.get("JAXRENDER_SEED", "0"))
     return np.random.default_rng(zlib.crc32(request.node.name.encode()) + extra)
+
+
+@pytest.fixture(autouse=True)
+def _jax_cache_setting_restored():
+    # A test that turns JAX's persistent cache on (jax.config is process-wide) leaves it off for
+    # the tests after it in the same worker: XLA:CPU aborted in this cache's write during a
+    # later test twice.
+    from jax.experimental.compilation_cache import compilation_cache
+
+    names = ("jax_compilation_cache_dir", "jax_enable_compilation_cache")
+    before = {n: jax.config.values[n] for n in names}
+    yield
+    changed = {n: v for n, v in before.items() if jax.config.values[n] != v}
+    for name, value in changed.items():
+        jax.config.update(name, value)
+    if changed:
+        compilation_cache.reset_cache()

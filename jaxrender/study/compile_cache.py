@@ -3,7 +3,9 @@ loads the executables it compiled before instead of compiling them again.
 
 Every program is cached, however quick its compile (JAX's default skips those under a second,
 which on a GPU is most of a study's programs). A ``JAX_COMPILATION_CACHE_DIR`` in the
-environment wins; ``JAXRENDER_COMPILATION_CACHE=0`` turns the cache off. Compile workers inherit the
+environment wins; ``JAXRENDER_COMPILATION_CACHE=0`` turns the cache off. On the CPU backend it is
+off unless ``JAXRENDER_COMPILATION_CACHE=1`` asks for it: XLA:CPU aborted twice inside this
+cache's write (serializing an executable) during the test suite. Compile workers inherit the
 setting with the rest of the parent's ``jax.config``.
 """
 
@@ -19,7 +21,7 @@ from jax.experimental.compilation_cache import compilation_cache
 
 from jaxrender.study.cache import cache_root
 
-ENV_OFF = "JAXRENDER_COMPILATION_CACHE"
+ENV_CACHE = "JAXRENDER_COMPILATION_CACHE"
 _EVENTS = {"/jax/compilation_cache/cache_hits": "hits",
            "/jax/compilation_cache/cache_misses": "misses"}
 _counts = {"hits": 0, "misses": 0}
@@ -71,12 +73,20 @@ def env_flag(name: str) -> bool | None:
 def turned_off() -> bool:
     """``JAXRENDER_COMPILATION_CACHE=0`` (or false, no, off): no persistent cache, no
     executable store."""
-    return env_flag(ENV_OFF) is False
+    return env_flag(ENV_CACHE) is False
+
+
+def wanted() -> bool:
+    """Should studies use the persistent cache? ``JAXRENDER_COMPILATION_CACHE`` says so; unset,
+    yes except on the CPU backend."""
+    said = env_flag(ENV_CACHE)
+    return jax.default_backend() != "cpu" if said is None else said
 
 
 def enable(directory: Path | None = None) -> Path | None:
-    """Turn the persistent cache on (idempotent); the folder used, or None when it is off."""
-    if turned_off():
+    """Turn the persistent cache on (idempotent) where it is ``wanted``; the folder used, or
+    None when it is off."""
+    if not wanted():
         return None
     users = os.environ.get("JAX_COMPILATION_CACHE_DIR")
     folder = Path(directory or users or default_dir())

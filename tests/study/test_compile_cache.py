@@ -1,5 +1,6 @@
 """The persistent compilation cache: under jaxrender's cache folder, a user's own JAX setting
-left alone, off on request, and a program compiled once loaded the next time."""
+left alone, off on request (and by default on the CPU), and a program compiled once loaded the
+next time."""
 
 import jax
 import jax.numpy as jnp
@@ -16,7 +17,7 @@ def _program(c: float):
 
 def test_compiled_once_then_loaded(tmp_path, monkeypatch, rng):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "1")  # off by default on the CPU
     monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
     folder = compile_cache.enable()
     assert folder == tmp_path / "xla", folder
@@ -39,19 +40,29 @@ def test_compiled_once_then_loaded(tmp_path, monkeypatch, rng):
 
 def test_follows_jaxrender_cache_and_can_be_turned_off(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "one"))
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "1")  # off by default on the CPU
     monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
     assert compile_cache.enable() == tmp_path / "one" / "xla"
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "two"))
     assert compile_cache.enable() == tmp_path / "two" / "xla"
     assert jax.config.values["jax_compilation_cache_dir"] == str(tmp_path / "two" / "xla")
-    monkeypatch.setenv(compile_cache.ENV_OFF, "0")
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "0")
     assert compile_cache.enable() is None
 
 
 def test_a_users_own_cache_folder_wins(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path / "ours"))
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "1")  # off by default on the CPU
     monkeypatch.setenv("JAX_COMPILATION_CACHE_DIR", str(tmp_path / "theirs"))
     assert compile_cache.enable() == tmp_path / "theirs"
     assert jax.config.values["jax_compilation_cache_dir"] == str(tmp_path / "theirs")
+
+
+def test_off_by_default_on_the_cpu_backend(tmp_path, monkeypatch):
+    assert jax.default_backend() == "cpu"
+    monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
+    monkeypatch.delenv(compile_cache.ENV_CACHE, raising=False)
+    previous = jax.config.values["jax_compilation_cache_dir"]
+    assert compile_cache.enable() is None
+    assert jax.config.values["jax_compilation_cache_dir"] == previous, "the setting changed"
+    assert not (tmp_path / "xla").exists()

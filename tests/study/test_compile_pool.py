@@ -106,7 +106,7 @@ def test_processes_match_threads(tiny_study, tmp_path, monkeypatch, caplog, pers
     # that read it would hand back an executable loaded from it (on XLA:CPU, one that lost its
     # code on the way: the frames below would not compute).
     previous = jax.config.values["jax_compilation_cache_dir"]
-    monkeypatch.setenv(compile_cache.ENV_OFF, "1" if persistent_cache else "0")
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "1" if persistent_cache else "0")
     monkeypatch.setenv(executables.ENV_STORE, "1")
     if persistent_cache:
         compile_cache.enable(tmp_path / "xla")

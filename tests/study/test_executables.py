@@ -51,7 +51,7 @@ def _store_counts(line):
 
 
 def test_rerun_loads_every_program(tiny_study, tmp_path, monkeypatch):
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.delenv(compile_cache.ENV_CACHE, raising=False)
     # As in a new process: programs jax kept in memory from the tests before are not stored.
     jax.clear_caches()
     first, line1 = _study(tiny_study, tmp_path / "one", monkeypatch)
@@ -64,7 +64,7 @@ def test_rerun_loads_every_program(tiny_study, tmp_path, monkeypatch):
     assert _store_counts(line2) == (n, 0), line2
     assert {r["compile_method"] for r in second.rows} == {"stored"}
     assert _what(second.rows) == _what(first.rows), "programs from the store computed otherwise"
-    monkeypatch.setenv(compile_cache.ENV_OFF, "0")
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "0")
     third, line3 = _study(tiny_study, tmp_path / "three", monkeypatch)
     assert _store_counts(line3) is None, line3
     assert {r["compile_method"] for r in third.rows} == {"aot"}
@@ -90,7 +90,7 @@ def _key(cfg, frames, step=0.1):
 
 def test_key_follows_static_config_and_shapes_not_values(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.delenv(compile_cache.ENV_CACHE, raising=False)
     cfg = registry.RenderConfig(width=4, height=2)
     key = _key(cfg, 3)
     assert key is not None and key == _key(cfg, 3)
@@ -122,7 +122,7 @@ def store(tmp_path, monkeypatch):
     """An empty store, used as compile_all uses it: JAX's cache (which a test before may have
     turned on) suspended, so that XLA compiles what the store misses."""
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.delenv(compile_cache.ENV_CACHE, raising=False)
     with compile_cache.suspended():
         yield executables.folder()
 
@@ -162,7 +162,7 @@ def test_a_damaged_entry_compiles_again(store, caplog, damage):
 
 def test_off_with_the_compilation_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
-    monkeypatch.setenv(compile_cache.ENV_OFF, "0")
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "0")
     cfg = registry.RenderConfig(width=4, height=2)
     assert _key(cfg, 3) is None
     for _ in range(2):
@@ -176,7 +176,7 @@ def test_stores_only_what_xla_compiled_just_now(tmp_path, monkeypatch):
     # On XLA:CPU an executable loaded from JAX's cache serializes without its code; one jax
     # kept in memory may be such an executable. Either is used, never stored.
     monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.setenv(compile_cache.ENV_CACHE, "1")  # JAX's cache, off by default on the CPU
     monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
     previous = jax.config.values["jax_compilation_cache_dir"]
     cfg = registry.RenderConfig(width=7, height=3)
@@ -260,7 +260,7 @@ def test_an_exclusive_hold_waits_for_shared_ones_and_goes_first():
 @pytest.mark.parametrize("value, on", [(None, False), ("1", True), ("0", False), ("off", False)])
 def test_off_by_default_on_the_cpu_backend(monkeypatch, value, on):
     assert jax.default_backend() == "cpu"
-    monkeypatch.delenv(compile_cache.ENV_OFF, raising=False)
+    monkeypatch.delenv(compile_cache.ENV_CACHE, raising=False)
     if value is None:
         monkeypatch.delenv(executables.ENV_STORE, raising=False)
     else:
