@@ -1,16 +1,19 @@
 """Work lists and chunked dispatch: the one place where shading work is launched.
 
 A pipeline that shades fewer points must run fewer shader evaluations, or its time would not
-follow its work and a comparison of architectures would measure the simulation. The points to shade are compacted into a ``WorkList`` (``compaction.compact_indices``), and
-``shade()`` runs over it in chunks of a static size inside a ``lax.while_loop`` whose trip count
-is the number of chunks that hold work, like DispatchIndirect: the compiled program evaluates
-the shader ``ceil(n / chunk)`` times, never over the full screen with a mask. The counts are
-read off that same work list, so they cannot disagree with the work done (``count`` items, ``chunks * chunk`` lanes launched).
+follow its work and a comparison of architectures would measure the simulation. The points to
+shade are compacted into a ``WorkList`` (``compaction.compact_indices``), and ``shade()`` runs
+over it in whole chunks of a static size, like DispatchIndirect: the compiled program evaluates
+the shader over the chunks that hold work (``launch_mode``: in a loop, or in one launch of a
+power-of-two number of chunks), never over the full screen with a mask. The counts are read
+off that same work list, so they cannot disagree with the work done (``count`` items,
+``chunks * chunk`` lanes launched).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
 from typing import Callable
 
 import jax
@@ -57,6 +60,7 @@ class WorkList:
     count: Array
     invocations: Array | None = None
     chunk: int = static_field(default=0)
+    launched: Array | None = None  # chunks launched, when a launch rounded the count up
 
     @classmethod
     def of(cls, active: Array) -> "WorkList":
@@ -66,6 +70,9 @@ class WorkList:
 
     @property
     def chunks(self) -> Array:
+        """Chunks launched: the count's, or more where a launch rounded it up."""
+        if self.launched is not None:
+            return self.launched
         return (self.count + self.chunk - 1) // self.chunk
 
     @property
@@ -82,30 +89,87 @@ class WorkList:
         return {"invocations": self.invocations, "lanes": self.lanes, "chunks": self.chunks}
 
 
+LAUNCH_MODES = ("loop", "switch", "binary")
+ENV_LAUNCH = "JAXRENDER_DISPATCH"
+
+
+def launch_mode() -> str:
+    """How a work list's chunks are launched, read when a program is traced:
+    ``JAXRENDER_DISPATCH`` (loop, switch or binary), else "switch" on a GPU and "loop"
+    elsewhere.
+
+    - loop: one ``while`` iteration per chunk. On a GPU every iteration copies its condition to
+      the host and waits for it, then launches the body's kernels again: that, not the shading,
+      was most of each pipeline's fixed cost.
+    - switch: one launch of the smallest power-of-two number of chunks that holds the list
+      (one condition, one set of kernels; up to half the lanes idle, counted in ``lanes``).
+    - binary: one launch per set bit of the chunk count (exactly the loop's lanes, a
+      condition per bit).
+    On the CPU a loop iteration costs no wait, and switch and binary compile the shader once per
+    launch size, so the loop stays."""
+    said = os.environ.get(ENV_LAUNCH, "").strip().lower()
+    if said:
+        if said not in LAUNCH_MODES:
+            raise ValueError(f"{ENV_LAUNCH}={said!r}: expected one of {', '.join(LAUNCH_MODES)}")
+        return said
+    return "loop" if jax.default_backend() == "cpu" else "switch"
+
+
+def _launch(n_chunks: Array, max_chunks: int, chunk: int, launch, acc, mode: str):
+    """Run ``launch(start, size, acc) -> acc`` over lanes ``0 .. n_chunks * chunk - 1`` (start
+    traced, size static) as ``mode`` says; returns (acc, chunks launched)."""
+    if mode == "loop":
+        acc = jax.lax.fori_loop(0, n_chunks, lambda k, a: launch(k * chunk, chunk, a), acc)
+        return acc, n_chunks
+    bits = max(int(max_chunks) - 1, 0).bit_length()  # 2**bits >= max_chunks
+    if mode == "binary":
+        for b in reversed(range(bits + 1)):
+            start = (n_chunks >> (b + 1) << (b + 1)) * chunk
+            acc = jax.lax.cond(((n_chunks >> b) & 1) == 1,
+                               lambda a, s=start, b=b: launch(s, chunk << b, a),
+                               lambda a: a, acc)
+        return acc, n_chunks
+    if mode != "switch":
+        raise ValueError(f"unknown launch mode {mode!r}: expected one of {LAUNCH_MODES}")
+    ceil_log2 = jnp.where(n_chunks <= 1, 0, 32 - jax.lax.clz(jnp.maximum(n_chunks - 1, 1)))
+    branch = jnp.where(n_chunks == 0, 0, 1 + ceil_log2)
+    zero = jnp.zeros((), jnp.int32)
+    branches = [lambda a: a] + [lambda a, b=b: launch(zero, chunk << b, a)
+                                for b in range(bits + 1)]
+    acc = jax.lax.switch(jnp.minimum(branch, bits + 1), branches, acc)
+    return acc, jnp.where(n_chunks == 0, 0, jnp.int32(1) << ceil_log2)
+
+
+def _chunks_of(count: Array, chunk: int) -> Array:
+    return (count + chunk - 1) // chunk
+
+
 def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
         chunk: int) -> tuple[Array, WorkList]:
-    """For the live items of ``work``, write ``fn(items int32[chunk], live bool[chunk]) ->
-    values[chunk, ...]`` into ``out[items]``.
+    """For the live items of ``work``, write ``fn(items int32[L], live bool[L]) ->
+    values[L, ...]`` into ``out[items]``, ``L`` lanes a launch (a multiple of ``chunk``).
 
-    Runs ceil(count / chunk) iterations; padding lanes of the last chunk are passed live=False
-    and their results are discarded. ``chunk`` 0 picks ``auto_chunk`` for the list. Returns
-    (out, the work list with its dispatch counts).
+    Launches whole chunks covering the count (``launch_mode``); padding lanes are passed
+    live=False and their results are discarded. ``chunk`` 0 picks ``auto_chunk`` for the list.
+    Returns (out, the work list with its dispatch counts).
     """
     items, n = work.items, work.count
     chunk = int(min(resolve_chunk(chunk, items.shape[0]), max(items.shape[0], 1)))
-    padded = jnp.concatenate([items, jnp.zeros((chunk,), items.dtype)])
-    n_chunks = (n + chunk - 1) // chunk
+    mode = launch_mode()
+    max_chunks = max(-(-items.shape[0] // chunk), 1)
+    # Zeros past the list for the lanes of the largest launch.
+    span = chunk if mode == "loop" else chunk << max(max_chunks - 1, 0).bit_length()
+    padded = jnp.concatenate([items, jnp.zeros((span,), items.dtype)])
     sentinel = out.shape[0]  # out-of-range index: scatter drops the lane
 
-    def body(k, acc):
-        start = k * chunk
-        lane_items = jax.lax.dynamic_slice(padded, (start,), (chunk,))
-        live = start + jnp.arange(chunk, dtype=jnp.int32) < n
+    def launch(start, size, acc):
+        lane_items = jax.lax.dynamic_slice(padded, (start,), (size,))
+        live = start + jnp.arange(size, dtype=jnp.int32) < n
         vals = fn(lane_items, live)
         return acc.at[jnp.where(live, lane_items, sentinel)].set(vals, mode="drop")
 
-    out = jax.lax.fori_loop(0, n_chunks, body, out)
-    return out, WorkList(items, n, n, chunk)
+    out, launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch, out, mode)
+    return out, WorkList(items, n, n, chunk, launched)
 
 
 def shade(
@@ -136,6 +200,7 @@ def dispatch_lanes(
     fn: Callable[[Array, Array], tuple[Array, Array, Array]],
     out: Array,
     chunk: int = DEFAULT_CHUNK,
+    max_lanes: int | None = None,
 ) -> tuple[Array, WorkList]:
     """Launch lanes ``0 .. n-1`` in chunks: ``fn(lanes int32[chunk], live bool[chunk])`` returns
     ``(dest int32[chunk], values[chunk, ...], write bool[chunk])`` and ``out[dest] = values``
@@ -143,20 +208,22 @@ def dispatch_lanes(
     helper lanes, waves with idle lanes): every lane is evaluated, only some write.
 
     Returns (out, the lane list as a WorkList: ``count`` n lanes, ``invocations`` the lanes
-    that wrote). ``chunk`` 0 picks ``auto_chunk`` for ``out``'s length.
+    that wrote). ``chunk`` 0 picks ``auto_chunk`` for ``out``'s length. ``max_lanes``: the
+    most ``n`` can be (static; default ``out``'s length), which sizes the largest launch.
     """
     chunk = resolve_chunk(chunk, out.shape[0])
-    n_chunks = (n + chunk - 1) // chunk
     sentinel = out.shape[0]
 
-    def body(k, carry):
+    def launch(start, size, carry):
         acc, wrote = carry
-        lanes = k * chunk + jnp.arange(chunk, dtype=jnp.int32)
+        lanes = start + jnp.arange(size, dtype=jnp.int32)
         live = lanes < n
         dest, vals, write = fn(lanes, live)
         ok = live & write
         acc = acc.at[jnp.where(ok, dest, sentinel)].set(vals, mode="drop")
         return acc, wrote + jnp.sum(ok, dtype=jnp.int32)
 
-    out, wrote = jax.lax.fori_loop(0, n_chunks, body, (out, jnp.int32(0)))
-    return out, WorkList(jnp.zeros((0,), jnp.int32), n, wrote, chunk)
+    max_chunks = max(-(-int(max_lanes or out.shape[0]) // chunk), 1)
+    (out, wrote), launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch,
+                                     (out, jnp.int32(0)), launch_mode())
+    return out, WorkList(jnp.zeros((0,), jnp.int32), n, wrote, chunk, launched)

@@ -194,7 +194,7 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
         if cfg.shade_helpers:
             colours, work = dispatch_lanes(
                 ql["n_quads"] * 4, _helper_lane_fn(scene, camera, clip, cfg, ql), colours,
-                cfg.chunk)
+                cfg.chunk, 4 * colours.shape[0])  # a quad holds one fragment at least
         else:
             colours, work = forward_shade(scene, camera, shade_unit, unit_points, blended, cfg)
     with jax.named_scope("resolve"):

@@ -142,7 +142,8 @@ def shade_texels(scene, camera, static: TadsStatic, smp: Samples, state: ShadeTe
         return tex, shade(pts, scene), live
 
     chunk = dispatch.resolve_chunk(cfg.chunk, cfg.width * cfg.height)
-    colour, lanes_run = dispatch.dispatch_lanes(work.count, lanes, state.colour, chunk)
+    colour, lanes_run = dispatch.dispatch_lanes(work.count, lanes, state.colour, chunk,
+                                                work.items.shape[0])
     n = state.frame.shape[0]
     frame = state.frame.at[jnp.where(smp.shade, smp.texel, n).reshape(-1)].set(
         jnp.asarray(t, jnp.int32), mode="drop")

@@ -40,7 +40,7 @@ from pathlib import Path
 import jax
 
 from jaxrender import timing
-from jaxrender.pipelines import program
+from jaxrender.pipelines import dispatch, program
 from jaxrender.study import cache, compile_cache
 
 log = logging.getLogger("jaxrender.study")
@@ -197,7 +197,8 @@ def _environment() -> dict:
     return {"code": cache.code_version(), "jax": [jax.__version__, jaxlib.__version__],
             "device": [dev.platform, dev.device_kind, dev.client.platform_version, dev.id],
             "host": _host() if dev.platform == "cpu" else [],
-            "xla_flags": os.environ.get("XLA_FLAGS", ""), "jax_config": options}
+            "xla_flags": os.environ.get("XLA_FLAGS", ""), "jax_config": options,
+            "launch_mode": dispatch.launch_mode()}
 
 
 def program_key(pipe, fixed, args, device=None) -> str | None:

@@ -27,6 +27,47 @@ def test_worklist_counts_come_from_the_dispatch(rng):
                            "chunks": done.chunks}
 
 
+def _chunks_launched(mode: str, n: int, chunk: int) -> int:
+    # Hand-worked: the loop and the bit decomposition launch ceil(n / chunk) chunks, the switch
+    # the next power of two of that (none for an empty list).
+    whole = -(-n // chunk)
+    if mode == "switch" and whole:
+        return 1 << (whole - 1).bit_length()
+    return whole
+
+
+@pytest.mark.parametrize("mode", dispatch.LAUNCH_MODES)
+@pytest.mark.parametrize("n_active", [0, 1, 63, 64, 65, 200, 300])
+def test_every_launch_mode_writes_the_same_and_counts_its_lanes(rng, monkeypatch, mode,
+                                                                n_active):
+    monkeypatch.setenv(dispatch.ENV_LAUNCH, mode)
+    active = np.zeros(300, bool)
+    active[rng.choice(300, n_active, replace=False)] = True
+    work = dispatch.WorkList.of(jnp.asarray(active))
+    fn = lambda items, live: items.astype(jnp.float32) * 2.0 + 1.0  # noqa: E731
+    out, done = dispatch.run(work, fn, jnp.full((300,), -1.0, jnp.float32), 64)
+    np.testing.assert_array_equal(np.asarray(out), np.where(active, np.arange(300) * 2.0 + 1.0,
+                                                            -1.0), err_msg=mode)
+    chunks = _chunks_launched(mode, n_active, 64)
+    assert (int(done.invocations), int(done.chunks), int(done.lanes)) == (
+        n_active, chunks, chunks * 64), (mode, n_active)
+    # Lanes not one-to-one with outputs: every other lane writes.
+    lanes_fn = lambda lanes, live: (lanes // 2, lanes.astype(jnp.float32), lanes % 2 == 0)  # noqa
+    out, done = dispatch.dispatch_lanes(jnp.int32(2 * n_active), lanes_fn,
+                                        jnp.zeros((300,), jnp.float32), 64, 600)
+    want = np.zeros(300)
+    want[:n_active] = np.arange(n_active) * 2.0
+    np.testing.assert_array_equal(np.asarray(out), want, err_msg=f"{mode} lanes")
+    chunks = _chunks_launched(mode, 2 * n_active, 64)
+    assert (int(done.invocations), int(done.chunks)) == (n_active, chunks), (mode, n_active)
+
+
+def test_an_unknown_launch_mode_is_refused(monkeypatch):
+    monkeypatch.setenv(dispatch.ENV_LAUNCH, "unrolled")
+    with pytest.raises(ValueError, match="JAXRENDER_DISPATCH='unrolled'.*loop, switch, binary"):
+        dispatch.launch_mode()
+
+
 @pytest.mark.parametrize("wave_size", [32, 64])
 def test_count_waves_is_a_ceiling_per_group(rng, wave_size):
     lanes = rng.integers(0, 200, 17)
