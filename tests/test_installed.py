@@ -160,6 +160,9 @@ def test_builtin_presets_then_a_local_override(installed, tmp_path):
     assert (f"# preset 'pan_slow': {(tmp_path / 'configs').resolve()} ({local.resolve()}, "
             "overrides the built-in)") in resolved, resolved
     assert "pixels_per_frame = 2.0" in resolved, resolved
-    # The same programs as the first run (cameras are arguments, not constants): all loaded,
-    # from the executable store where it is on, else from JAX's cache (the CPU default).
-    assert re.search(r"(executable store|compilation cache): \d+ loaded, 0 compiled", log), log
+    assert "compiled or loaded 5 program(s)" in log, log
+    # Where a cache is on (a GPU, or JAXRENDER_COMPILATION_CACHE=1) the camera override reuses
+    # every program of the first run, as cameras are arguments (test_executables checks the
+    # key itself); on the CPU default nothing is cached and the log claims nothing.
+    cached = re.search(r"(executable store|compilation cache): \d+ loaded, (\d+) compiled", log)
+    assert cached is None or cached.group(2) == "0", log
