@@ -5,8 +5,8 @@ program called once per camera), on the same cameras.
     python benchmarks/bench_sequence.py --scenes terrain foliage --resolution 1920x1080 \
         --frames 60 --rounds 5
 
-Programs are compiled ahead of time (in threads: XLA compiles outside the GIL) before anything
-is timed. Each round times the whole sequence once and then the single-frame program once on
+Programs are compiled ahead of time (in threads: XLA compiles outside the GIL), all of them
+before anything is timed. Each round times the whole sequence once and then the single-frame program once on
 every camera of the path, so the two are interleaved on the noisy lent machine; the table
 gives the medians over rounds of (sequence ms / frames) and of the per-round mean single call,
 and their ratio (sequence per frame / single: below 1 the sequence is faster).
@@ -19,7 +19,7 @@ import json
 import time
 import statistics
 import sys
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
 import jax
@@ -34,8 +34,10 @@ from jaxrender.scene.camera_path import pan  # noqa: E402
 from jaxrender.shading import load_lit_scene  # noqa: E402
 
 
-def _compile_both(pipe, scene, path, cfg):
+def _compile_both(pipe, scene, path, cfg, single=True):
     seq, seq_ms = program.compile(pipe, scene, path, cfg, sequence=True)
+    if not single:
+        return seq, None, seq_ms / 1e3, None
     one, one_ms = program.compile(pipe, scene, _camera(path, 0), cfg)
     return seq, one, seq_ms / 1e3, one_ms / 1e3
 
@@ -57,6 +59,8 @@ def main(argv=None) -> int:
     ap.add_argument("--pixels-per-frame", type=float, default=1.0)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--json", default=None, help="write the rows here")
+    ap.add_argument("--no-single", action="store_true",
+                    help="time the sequence only (how studies time a frame), not single calls")
     a = ap.parse_args(argv)
     w, h = a.resolution
     names = a.pipelines or [p.name for p in list_pipelines()]
@@ -72,22 +76,26 @@ def main(argv=None) -> int:
                 pipe = next(p for p in list_pipelines() if p.name == name)
                 cfg = make_config(name, width=w, height=h)
                 jobs[sname, name] = (scene, path, pool.submit(_compile_both, pipe, scene, path,
-                                                               cfg))
+                                                               cfg, not a.no_single))
+        wait([fut for _, _, fut in jobs.values()])  # no compile thread competes with a timing
         rows = []
         for (sname, name), (scene, path, fut) in jobs.items():
             try:
                 seq, one, seq_c, one_c = fut.result()
                 jax.block_until_ready(seq(scene, path))  # warm-up
-                singles = [_camera(path, i) for i in range(a.frames)]
-                jax.block_until_ready(one(scene, singles[0]))
+                singles = [_camera(path, i) for i in range(a.frames)] if one else []
+                if one:
+                    jax.block_until_ready(one(scene, singles[0]))
                 seq_pf, single = [], []
                 for _ in range(a.rounds):
                     seq_pf.append(_time(seq, scene, path) / a.frames)
-                    single.append(statistics.mean(_time(one, scene, c) for c in singles))
-                s, o = statistics.median(seq_pf), statistics.median(single)
+                    if one:
+                        single.append(statistics.mean(_time(one, scene, c) for c in singles))
+                s = statistics.median(seq_pf)
+                o = statistics.median(single) if one else None
                 rows.append({"scene": sname, "pipeline": name, "sequence_ms_per_frame": s,
-                             "single_ms": o, "ratio": s / o, "compile_seq_s": seq_c,
-                             "compile_single_s": one_c})
+                             "single_ms": o, "ratio": s / o if o else None,
+                             "compile_seq_s": seq_c, "compile_single_s": one_c})
             except Exception as e:  # noqa: BLE001 - a benchmark reports and goes on
                 rows.append({"scene": sname, "pipeline": name,
                              "error": f"{type(e).__name__}: {e}"[:160]})

@@ -351,8 +351,8 @@ def _counts(scene, sheet, cfg, fp, res: Residency, work: dispatch.WorkList, out:
         chunks_shaded=chunks_shaded,
         chunks_reused=jnp.sum(reused, dtype=jnp.int32),
         store_capacity_shadels=jnp.int32(cfg.store_chunks * LANES),
-        store_bytes=jnp.int32(cfg.store_chunks * LANES * SHADEL_BYTES),
-        store_bytes_used=alloc_lanes * SHADEL_BYTES,
+        store_bytes=jnp.float32(cfg.store_chunks * LANES * SHADEL_BYTES),  # may pass 2^31
+        store_bytes_used=f32(alloc_lanes) * SHADEL_BYTES,
         mip_bias=al.bias,
         mip_bias_steps=al.bias_steps,
         trilinear_overhead=f32(al.n_alloc) / jnp.maximum(f32(finest), 1.0),

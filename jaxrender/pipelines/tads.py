@@ -230,7 +230,8 @@ def tads_counts(static: TadsStatic, cfg: TadsConfig, fp, smp: Samples, due, work
         duplicates_removed=jnp.sum(smp.distinct & smp.claimed & due, dtype=jnp.int32),
         duplicates_missed=inv - unique,
         gbuffer_bytes=gbuffer_bytes,
-        shade_texture_bytes=jnp.int32(n_tex * (TEXEL_BYTES + COUNTER_BYTES)),
+        # float: a scene's charts can need more than 2^31 bytes (thin at 1920x1080: 2.4 GB)
+        shade_texture_bytes=jnp.float32(n_tex * (TEXEL_BYTES + COUNTER_BYTES)),
         taps_read=taps_read, stale_taps=out.stale, missing_taps=out.missing,
         alpha_invocations=vis.counts["alpha_invocations"], overflow=out.overflow, **hist)
     aux = {"sample_class": jnp.where(fp.covered, per_pixel, -1).reshape(h, w),
