@@ -95,24 +95,23 @@ ENV_LAUNCH = "JAXRENDER_DISPATCH"
 
 def launch_mode() -> str:
     """How a work list's chunks are launched, read when a program is traced:
-    ``JAXRENDER_DISPATCH`` (loop, switch or binary), else "switch" on a GPU and "loop"
-    elsewhere.
+    ``JAXRENDER_DISPATCH`` (loop, switch or binary), else "loop".
 
-    - loop: one ``while`` iteration per chunk. On a GPU every iteration copies its condition to
-      the host and waits for it, then launches the body's kernels again: that, not the shading,
-      was most of each pipeline's fixed cost.
+    - loop: one ``while`` iteration per chunk (on a GPU each iteration reads its condition back
+      and launches the body's kernels again).
     - switch: one launch of the smallest power-of-two number of chunks that holds the list
       (one condition, one set of kernels; up to half the lanes idle, counted in ``lanes``).
     - binary: one launch per set bit of the chunk count (exactly the loop's lanes, a
       condition per bit).
-    On the CPU a loop iteration costs no wait, and switch and binary compile the shader once per
-    launch size, so the loop stays."""
+    Measured on an H200 at 1920x1080 the three are within 3% of each other on every pipeline
+    (benchmarks/RESULTS.md), so the loop, which compiles the shader once, is the default; switch
+    and binary compile it once per launch size."""
     said = os.environ.get(ENV_LAUNCH, "").strip().lower()
     if said:
         if said not in LAUNCH_MODES:
             raise ValueError(f"{ENV_LAUNCH}={said!r}: expected one of {', '.join(LAUNCH_MODES)}")
         return said
-    return "loop" if jax.default_backend() == "cpu" else "switch"
+    return "loop"
 
 
 def _launch(n_chunks: Array, max_chunks: int, chunk: int, launch, acc, mode: str):
