@@ -162,6 +162,7 @@ def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log,
         log(f"compiled or loaded {len(compiled)} program(s){on} with {compile_workers()} "
             f"worker(s) and rendered the references in {time.perf_counter() - t0:.1f} s"
             f"{executables.describe(before[1])}{compile_cache.describe(before[0])}")
+        bar.reset(total=total)  # the rate and ETA are the rendering's, not the compiles'
         t0 = time.perf_counter()
         _render_placed(study, todo, st, env, out_dir, bar, compiled, scenes, cams, placement)
     finally:
