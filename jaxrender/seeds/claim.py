@@ -19,7 +19,8 @@ class Claim:
     reproduced. ``baseline`` is the value meaning "no effect" (1.0 for a ratio, 0.0 for a
     difference): when it is set and ours lies on the same side of it as the published value,
     the direction is reproduced even if the magnitude is not. ``reason`` says why a claim is
-    not (or not fully) reproduced, or why it could not be measured (``ours`` None)."""
+    not (or not fully) reproduced, or why it could not be measured (``ours`` None or NaN; an
+    infinite ``ours`` is compared like any other)."""
 
     source: str
     figure: str
@@ -37,7 +38,9 @@ class Claim:
 
     @property
     def verdict(self) -> str:
-        if self.ours is None or not math.isfinite(self.ours):
+        # An infinite value is a measurement (the PSNR of an exact image); only a missing or
+        # NaN one is not.
+        if self.ours is None or math.isnan(self.ours):
             return NOT_MEASURED
         # The edge counts as inside; float rounding of the difference must not decide it.
         if abs(self.ours - self.published) <= self.tolerance * abs(self.published) * (1 + 1e-12):

@@ -19,6 +19,9 @@ def claim(ours, published=0.40, tolerance=0.10, baseline=None):
     (1.00, 1.0, NOT_REPRODUCED),       # no effect at all is not a direction
     (None, 1.0, NOT_MEASURED),
     (float("nan"), None, NOT_MEASURED),
+    (float("inf"), None, NOT_REPRODUCED),  # an exact image's PSNR: measured, not the paper's
+    (float("inf"), 0.0, DIRECTION),        # published 0.40 > 0, ours on the same side
+    (float("-inf"), 0.0, NOT_REPRODUCED),  # the opposite side
 ])
 def test_verdict_against_hand_worked_cases(ours, baseline, expected):
     assert claim(ours, baseline=baseline).verdict == expected, (ours, baseline)
