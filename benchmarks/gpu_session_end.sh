@@ -15,6 +15,11 @@ for s in ${STUDIES:-temporal_stability tads_comparison}; do
   timeout ${STUDY_S:-100} python3 -m jaxrender study $s --out "$OUT/runs/$s" --no-progress \
     2>&1 | quiet | tail -14
 done
+# The tables first, flat (they come back even if the call's limit stops the tarball below).
+mkdir -p "$OUT/tables"
+for f in "$OUT"/runs/*/results.csv "$OUT"/runs/*/summary.csv "$OUT"/runs/seeds/*/*.csv; do
+  [ -f "$f" ] && cp "$f" "$OUT/tables/$(basename "$(dirname "$f")")_$(basename "$f")"
+done
 # A file over 16 MiB does not come back from the device: keep the tables and PNG figures.
 find "$OUT/runs" \( -name "*.pdf" -o -name "*.npz" \) -delete
 tar -czf "$OUT/runs.tgz" -C "$OUT" runs && rm -rf "$OUT/runs"
