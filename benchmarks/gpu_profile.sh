@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
 # Kernel profiles of the rasterizer and every pipeline on the lent GPU (one device call).
+#   carry: [".whl"] (object_space needs xatlas)
 #   device run: bash benchmarks/gpu_profile.sh          (output: $OUT/profile.md)
 #   one part:   bash benchmarks/gpu_profile.sh raster
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
 cd "$(dirname "$0")/.."
-export PYTHONPATH=$PWD${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
+if ls .whl/*.whl >/dev/null 2>&1; then  # carried wheels (xatlas for object_space and tads)
+  python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
+    --target /tmp/site .whl/*.whl >/dev/null 2>&1 || echo "wheel install FAILED"
+fi
+export PYTHONPATH=$PWD:/tmp/site${PYTHONPATH:+:$PYTHONPATH} PYTHONUNBUFFERED=1
 LOG=$OUT/profile.md
 T0=$(date +%s)
 P() { echo "### +$(( $(date +%s) - T0 )) s: $*" | tee -a "$LOG"; timeout -k 5 ${STEP_S:-120} python3 benchmarks/profile_kernels.py "$@" 2>&1 | grep -v "^WARNING\|^I0000\|^E0000" | tee -a "$LOG"; }
@@ -22,6 +27,15 @@ chunks)
 pipelines)
   for p in forward visbuffer checkerboard dacs object_space; do P $p --scene "$TARGET" --top 12; done
   P reference --scene "$TARGET" --set k=4 --top 12 --calls 2 ;;
+issue23)  # the pipelines over their fixed-cost target, per named scope (issue 23)
+  FW="--scope fragments --scope alpha_test --scope depth_test --scope quads --scope shade --scope resolve --scope counts"
+  for sc in stripes foliage room; do P forward --scene $sc --top 14 $FW; done
+  VB="--scope visibility --scope classify --scope shade --scope broadcast"
+  for sc in thin room; do P visbuffer --scene $sc --top 12 $VB; done
+  for sc in stripes grass room; do P dacs --scene $sc --top 12 --scope visibility --scope decide --scope interpolate --scope shade; done
+  P deferred --scene room --top 8
+  P object_space --scene thin --top 10
+  P reference --scene room --top 12 --calls 2 --scope transform --scope raster --scope shade --scope reconstruct ;;
 flags)
   XLA_FLAGS="--xla_gpu_enable_command_buffer=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE" P raster --resolution 640x360 --triangles 10000 --top 5
   XLA_FLAGS="--xla_gpu_enable_command_buffer=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE" P deferred --scene "$TARGET" --top 5 ;;

@@ -160,15 +160,10 @@ def plan_coarse_pixels(scene, tri, rate, cfg: VisBufferConfig) -> ShadePlan:
     rh = jnp.asarray(RATE_H, jnp.int32)[rate]
     bx, by = x // rw, y // rh
     n_mat = scene.materials.albedo.shape[0]
-    n_rates = len(RATES)
-    (m_s, r_s, by_s, bx_s, p_s), _ = lex_sort(
-        (mat, rate, by, bx, pix), (n_mat - 1, n_rates - 1, h - 1, w - 1, n_pix - 1))
-    live = m_s != BIG
-    start = segment_starts(m_s, r_s, by_s, bx_s) & live
-    anchor_sorted = p_s[first_of_segment_index(start)]
-    # p_s is a permutation: unique indices let the scatters be plain stores.
-    anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted, unique_indices=True)
-    is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start, unique_indices=True)
+    if cfg.vrs == "off":  # every coarse pixel is one pixel: each covered pixel anchors itself
+        anchor, is_anchor = pix, covered.reshape(-1)
+    else:
+        anchor, is_anchor = _coarse_anchors(mat, rate, bx, by, n_mat, w, h)
     n_work = jnp.sum(is_anchor, dtype=jnp.int32)
     if cfg.tiling == "loose":
         work, run_starts, live_sorted = loose_order(is_anchor, mat, x, y, w, h, n_mat)
@@ -176,6 +171,22 @@ def plan_coarse_pixels(scene, tri, rate, cfg: VisBufferConfig) -> ShadePlan:
         work, run_starts, live_sorted = _tile_order(is_anchor, mat, rate, bx, by, cfg, n_mat)
     return ShadePlan(dispatch.WorkList(work, n_work), anchor, is_anchor, run_starts,
                      live_sorted, rate)
+
+
+def _coarse_anchors(mat, rate, bx, by, n_mat: int, w: int, h: int) -> tuple[Array, Array]:
+    """(each pixel's anchor int32[P], is_anchor bool[P]): the first pixel of each (material,
+    rate, aligned block)."""
+    n_pix = w * h
+    pix = jnp.arange(n_pix, dtype=jnp.int32)
+    (m_s, r_s, by_s, bx_s, p_s), _ = lex_sort(
+        (mat, rate, by, bx, pix), (n_mat - 1, len(RATES) - 1, h - 1, w - 1, n_pix - 1))
+    live = m_s != BIG
+    start = segment_starts(m_s, r_s, by_s, bx_s) & live
+    anchor_sorted = p_s[first_of_segment_index(start)]
+    # p_s is a permutation: unique indices let the scatters be plain stores.
+    anchor = jnp.zeros((n_pix,), jnp.int32).at[p_s].set(anchor_sorted, unique_indices=True)
+    is_anchor = jnp.zeros((n_pix,), bool).at[p_s].set(start, unique_indices=True)
+    return anchor, is_anchor
 
 
 def _tile_order(is_anchor, mat, rate, bx, by, cfg: VisBufferConfig, n_mat: int):

@@ -55,6 +55,21 @@ def test_an_id_field_overflow_is_counted():
     np.testing.assert_array_equal(np.asarray(decode(scene, ids, IdLayout())), tri)
 
 
+@pytest.mark.parametrize("tiling", ["loose", "tiles"])
+def test_vrs_off_plans_as_the_general_path_at_full_rate(tiling):
+    # vrs = "off" skips the coarse-pixel sort (each covered pixel is its own anchor); a fixed
+    # 1x1 rate runs that sort, and must plan the same shading.
+    scene = make_scene([rect_part(0, 0, 10, 7, 2.0, tilt=0.3), rect_part(3, 2, W, H, 4.0)])
+    off = render(scene, tiling=tiling)
+    general = render(scene, tiling=tiling, vrs="fixed", vrs_rate="1x1")
+    np.testing.assert_array_equal(np.asarray(off.image), np.asarray(general.image),
+                                  err_msg=f"{tiling}: image")
+    for key in ("shade_invocations", "waves", "unfilled_lanes", "vertex_invocations"):
+        assert int(off.counts[key]) == int(general.counts[key]), f"{tiling}: {key}"
+    np.testing.assert_array_equal(np.asarray(off.aux["shade_count"]),
+                                  np.asarray(general.aux["shade_count"]), err_msg=tiling)
+
+
 def test_vrs_2x2_shades_a_quarter_and_broadcasts():
     scene = make_scene([rect_part(0, 0, W, H, 3.0, tilt=0.5)])
     full = render(scene, tiling="tiles")

@@ -101,6 +101,18 @@ def test_segment_lanes():
     np.testing.assert_array_equal(np.asarray(segment_lanes(starts, live)), [2, 1, 2, 0, 0, 0, 0])
 
 
+def test_segment_lanes_counts_the_live_items_of_each_segment(rng):
+    n = 5000
+    starts = rng.random(n) < 0.02
+    starts[0] = True
+    live = rng.random(n) < 0.8  # not a prefix: every live item counts where it lies
+    seg = np.cumsum(starts) - 1
+    want = np.zeros(n, np.int64)
+    want[: seg[-1] + 1] = np.bincount(seg[live], minlength=seg[-1] + 1)
+    got = segment_lanes(jnp.asarray(starts), jnp.asarray(live))
+    np.testing.assert_array_equal(np.asarray(got), want, err_msg="live items per segment")
+
+
 @pytest.mark.parametrize("n_groups", [1, 3, 5000])
 def test_group_sizes_is_a_histogram(rng, n_groups):
     group = rng.integers(0, n_groups, 20000)
