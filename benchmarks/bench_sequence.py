@@ -27,7 +27,7 @@ import jax
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from jaxrender.bench.report import print_table  # noqa: E402
-from jaxrender.parsing import resolution_arg  # noqa: E402
+from jaxrender.parsing import parse_spec, resolution_arg  # noqa: E402
 from jaxrender.timing import environment, time_call  # noqa: E402
 from jaxrender.pipelines import list_pipelines, make_config, program  # noqa: E402
 from jaxrender.scene.camera_path import pan  # noqa: E402
@@ -53,7 +53,9 @@ def _time(fn, *args) -> float:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", nargs="+", default=["terrain", "foliage"])
-    ap.add_argument("--pipelines", nargs="+", default=None, help="default: every registered")
+    ap.add_argument("--pipelines", nargs="+", default=None,
+                    help="names or 'name:key=value,...' config variants; default: every "
+                         "registered pipeline")
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--frames", type=int, default=60)
     ap.add_argument("--pixels-per-frame", type=float, default=1.0)
@@ -73,8 +75,9 @@ def main(argv=None) -> int:
             cams = pan(scene.camera, a.frames, a.pixels_per_frame, h).cameras
             path = cams  # batched: stacked once, outside the timed calls
             for name in names:
-                pipe = next(p for p in list_pipelines() if p.name == name)
-                cfg = make_config(name, width=w, height=h)
+                base, params = parse_spec(name, "--pipelines")
+                pipe = next(p for p in list_pipelines() if p.name == base)
+                cfg = make_config(base, width=w, height=h, **params)
                 jobs[sname, name] = (scene, path, pool.submit(_compile_both, pipe, scene, path,
                                                                cfg, not a.no_single))
         wait([fut for _, _, fut in jobs.values()])  # no compile thread competes with a timing

@@ -56,3 +56,36 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
             v = ((packed >> shift) & ((1 << b) - 1)).astype(jnp.int32)
             out_keys.append(jnp.where(v > lim, EMPTY, v))
     return out_keys, [p[perm] for p in payloads]
+
+
+# The prefix lengths ``lex_sort_prefix`` sorts, as fractions of the list: a fragment list's
+# capacity is a few times what a frame fills, and a radix sort costs what it sorts.
+PREFIX_FRACTIONS = (1 / 8, 3 / 16, 1 / 4, 3 / 8, 1 / 2, 3 / 4)
+
+
+def prefix_sizes(n: int) -> list[int]:
+    """The static prefix lengths ``lex_sort_prefix`` chooses from for a list of ``n``."""
+    return sorted({max(1, -(-n * int(f * 16) // 16)) for f in PREFIX_FRACTIONS} | {n})
+
+
+def lex_sort_prefix(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Array],
+                    count: Array) -> tuple[list[Array], list[Array]]:
+    """``lex_sort`` of a list whose entries at and past ``count`` (int32, traced) are empty:
+    every key of those entries is out of its range. Sorts only the shortest prefix of
+    ``prefix_sizes`` that holds ``count`` entries (one ``lax.switch``); the empty tail comes
+    back as ``lex_sort`` returns it, keys EMPTY, in index order. Same result as ``lex_sort``."""
+    keys = [jnp.asarray(k, jnp.int32) for k in keys]
+    n = keys[0].shape[0]
+    sizes = prefix_sizes(n)
+
+    def sort_first(m: int):
+        def branch(operands):
+            ks, ps = operands
+            head_k, head_p = lex_sort([k[:m] for k in ks], limits, [p[:m] for p in ps])
+            tail = jnp.full((n - m,), EMPTY, jnp.int32)
+            return ([jnp.concatenate([h, tail]) for h in head_k],
+                    [jnp.concatenate([h, p[m:]]) for h, p in zip(head_p, ps)])
+        return branch
+
+    which = sum((jnp.asarray(count) > m).astype(jnp.int32) for m in sizes[:-1])
+    return jax.lax.switch(which, [sort_first(m) for m in sizes], (keys, list(payloads)))

@@ -35,7 +35,7 @@ from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, poin
                                             points_at_xy, raster_fragments)
 from jaxrender.pipelines.waves import check_wave_size
 from jaxrender.shading import alpha_test, shade
-from jaxrender.sorting import lex_sort
+from jaxrender.sorting import EMPTY, lex_sort, lex_sort_prefix
 from jaxrender.types import Array, Frame
 
 INF = float("inf")
@@ -89,15 +89,22 @@ class DrawList(NamedTuple):
 
 def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
     """The draw replayed from the fragment lists of every sample offset."""
-    n_s, n_pix, cap = len(offsets), cfg.width * cfg.height, cfg.capacity
     lists = [raster_fragments(clip, scene.faces, cfg, cull_backfaces=cfg.cull_backfaces,
                               sample_offset=o) for o in offsets]
+    n_pix, n_tris = cfg.width * cfg.height, scene.faces.shape[0]
+    if len(lists) == 1:
+        return single_sample_draw_list(lists[0], n_pix, n_tris)
+    return sorted_draw_list(lists, n_pix, n_tris)
+
+
+def sorted_draw_list(lists, n_pix: int, n_tris: int) -> DrawList:
+    """The DrawList of one fragment list per sample, each of the same capacity."""
+    n_s, cap = len(lists), lists[0].pixel.shape[0]
     cat = lambda f: jnp.concatenate([getattr(fr, f) for fr in lists])  # noqa: E731
     valid = cat("valid")
     samp = jnp.concatenate([jnp.full((cap,), s, jnp.int32) for s in range(n_s)])
     skey = jnp.where(valid, samp, n_s)
     # Draw order: per (sample, pixel), triangles in submission order; empty entries last.
-    n_tris = scene.faces.shape[0]
     (skey, pixel, tri), (depth,) = lex_sort(
         (skey, cat("pixel"), cat("tri")), (n_s, n_pix - 1, n_tris - 1), (cat("depth"),))
     valid = skey < n_s
@@ -107,6 +114,23 @@ def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
     slot = jnp.where(valid, skey * n_pix + pixel, n_s * n_pix)
     unit = _units(tri, pixel, valid, n_s, n_tris, n_pix)
     return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit, overflow, n_fragments, n_s)
+
+
+def single_sample_draw_list(fr, n_pix: int, n_tris: int) -> DrawList:
+    """``sorted_draw_list`` of one sample's list: its fragments are a prefix of the list, so
+    only that prefix is sorted (``lex_sort_prefix``), on pixel then triangle alone."""
+    live = jnp.minimum(fr.count, fr.pixel.shape[0])
+    (pixel, tri), (depth,) = lex_sort_prefix(
+        (jnp.where(fr.valid, fr.pixel, -1), jnp.where(fr.valid, fr.tri, -1)),
+        (n_pix - 1, n_tris - 1), (fr.depth,), live)
+    valid = pixel != EMPTY
+    pixel = jnp.where(valid, pixel, 0)
+    skey = jnp.where(valid, 0, 1)
+    seg = segment_starts(skey, pixel)
+    slot = jnp.where(valid, pixel, n_pix)
+    unit = jnp.arange(tri.shape[0], dtype=jnp.int32)
+    return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit,
+                    fr.overflowed.astype(jnp.int32), fr.count, 1)
 
 
 def _units(tri, pixel, valid, n_s: int, n_tris: int, n_pix: int) -> Array:
@@ -188,7 +212,7 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
             shade_unit = shade_unit | blended
     with jax.named_scope("quads"):
         ql = quad_list(draw.tri, draw.pixel, shade_unit, cfg.width, cfg.height,
-                       scene.faces.shape[0])
+                       scene.faces.shape[0], live=draw.fragments if n_s == 1 else None)
     with jax.named_scope("shade"):
         colours = jnp.zeros((draw.tri.shape[0], 3), jnp.float32)
         if cfg.shade_helpers:

@@ -12,7 +12,7 @@ import jax.numpy as jnp
 
 from jaxrender.compaction import compact_indices
 from jaxrender.raster.work_items import running_max
-from jaxrender.sorting import EMPTY, lex_sort
+from jaxrender.sorting import EMPTY, lex_sort, lex_sort_prefix
 from jaxrender.types import Array
 
 BIG = EMPTY  # the key of an unused entry: sorts last
@@ -84,8 +84,10 @@ def quad_keys(pixel: Array, width: int) -> tuple[Array, Array]:
     return (y // 2) * qw + x // 2, (y % 2) * 2 + x % 2
 
 
-def quad_list(tri: Array, pixel: Array, shaded: Array, width: int, height: int, n_tris: int):
-    """Group the shaded (triangle, pixel) units into 2x2 quads.
+def quad_list(tri: Array, pixel: Array, shaded: Array, width: int, height: int, n_tris: int,
+              live: Array | None = None):
+    """Group the shaded (triangle, pixel) units into 2x2 quads; with ``live`` (int32, traced),
+    no unit at or past index ``live`` is shaded, and only the units before it are sorted.
 
     Returns a dict with ``order`` (unit indices sorted by triangle, quad, lane; unshaded last),
     ``tri``, ``quad``, ``lane`` in that order, ``start`` (bool: first unit of a quad),
@@ -98,7 +100,13 @@ def quad_list(tri: Array, pixel: Array, shaded: Array, width: int, height: int, 
     q = jnp.where(shaded, quad, BIG)
     idx = jnp.arange(n, dtype=jnp.int32)
     n_quads_max = ((width + 1) // 2) * ((height + 1) // 2)
-    (t_s, q_s, l_s), (order,) = lex_sort((t, q, lane), (n_tris - 1, n_quads_max - 1, 3), (idx,))
+    keys = (t, q, jnp.where(shaded, lane, BIG))
+    limits = (n_tris - 1, n_quads_max - 1, 3)
+    if live is None:
+        (t_s, q_s, l_s), (order,) = lex_sort(keys, limits, (idx,))
+    else:
+        n_live = jnp.minimum(live, n)
+        (t_s, q_s, l_s), (order,) = lex_sort_prefix(keys, limits, (idx,), n_live)
     live = t_s != BIG
     start = segment_starts(t_s, q_s) & live
     n_quads = jnp.sum(start, dtype=jnp.int32)

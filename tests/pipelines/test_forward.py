@@ -92,3 +92,43 @@ def test_config_rejects_bad_values():
         make_config("forward", msaa=3)
     with pytest.raises(KeyError, match="no parameter"):
         make_config("forward", z_pre_pass=True)
+
+
+@pytest.mark.parametrize("filled", [0.05, 0.3, 0.9])
+def test_the_single_sample_draw_list_equals_the_general_sort(filled):
+    # One sample sorts only the filled prefix of its list; the general path sorts all of it.
+    from jaxrender.pipelines.forward import single_sample_draw_list, sorted_draw_list
+    from jaxrender.raster.fragments import Fragments
+
+    rng = np.random.default_rng(int(filled * 100))
+    cap, n_pix, n_tris = 4000, 900, 300
+    n = int(cap * filled)
+    valid = np.arange(cap) < n
+    pixel = np.where(valid, rng.integers(0, n_pix, cap), 0).astype(np.int32)
+    tri = np.where(valid, rng.integers(0, n_tris, cap), -1).astype(np.int32)
+    depth = np.where(valid, rng.random(cap), 1.0).astype(np.float32)
+    fr = Fragments(*(jax.numpy.asarray(a) for a in (pixel, tri, depth, valid)),
+                   jax.numpy.int32(n))
+    got = single_sample_draw_list(fr, n_pix, n_tris)
+    want = sorted_draw_list([fr], n_pix, n_tris)
+    for field in want._fields:
+        np.testing.assert_array_equal(np.asarray(getattr(got, field)),
+                                      np.asarray(getattr(want, field)),
+                                      err_msg=f"{field} at {filled:.0%} filled")
+
+
+@pytest.mark.parametrize("filled", [0.1, 0.6])
+def test_the_quad_list_of_a_filled_prefix_equals_the_full_sort(filled):
+    from jaxrender.pipelines.quads import quad_list
+
+    rng = np.random.default_rng(int(filled * 10))
+    n, w, h, n_tris = 3000, 40, 30, 200
+    live = int(n * filled)
+    tri = jax.numpy.asarray(rng.integers(0, n_tris, n), jax.numpy.int32)
+    pixel = jax.numpy.asarray(rng.integers(0, w * h, n), jax.numpy.int32)
+    shaded = jax.numpy.asarray((rng.random(n) < 0.7) & (np.arange(n) < live))
+    want = quad_list(tri, pixel, shaded, w, h, n_tris)
+    got = quad_list(tri, pixel, shaded, w, h, n_tris, live=jax.numpy.int32(live))
+    for key in want:
+        np.testing.assert_array_equal(np.asarray(got[key]), np.asarray(want[key]),
+                                      err_msg=f"{key} at {filled:.0%}")
