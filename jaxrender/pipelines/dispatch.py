@@ -226,3 +226,30 @@ def dispatch_lanes(
     (out, wrote), launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch,
                                      (out, jnp.int32(0)), launch_mode())
     return out, WorkList(jnp.zeros((0,), jnp.int32), n, wrote, chunk, launched)
+
+
+def shade_in_place(
+    active: Array,
+    points_of: Callable[[Array], object],
+    shade_fn: Callable[[object], Array],
+    out: Array,
+) -> tuple[Array, WorkList]:
+    """``shade`` of the True entries of bool[N] ``active`` in one launch of N lanes, each lane
+    its own entry, inactive lanes idle: what ``shade`` with a chunk of N launches, without the
+    compaction and the scatter back. For lists that fill most of their launch (the reference's
+    samples: every covered pixel of the screen, 64 times a frame), where those two passes cost
+    more than the idle lanes; nothing is launched for an empty list. Same counts as ``shade``
+    with ``chunk = N``: ``count`` and ``invocations`` the active entries, one chunk of N lanes."""
+    n = active.shape[0]
+    count = jnp.sum(active, dtype=jnp.int32)
+
+    def launch(acc):
+        pts = points_of(jnp.arange(n, dtype=jnp.int32))
+        pts = dataclasses.replace(pts, valid=pts.valid & active)
+        vals = shade_fn(pts)
+        keep = active.reshape(active.shape + (1,) * (vals.ndim - 1))
+        return jnp.where(keep, vals.astype(acc.dtype), acc)
+
+    out = jax.lax.cond(count > 0, launch, lambda acc: acc, out)
+    items = jnp.zeros((0,), jnp.int32)
+    return out, WorkList(items, count, count, n, (count > 0).astype(jnp.int32))

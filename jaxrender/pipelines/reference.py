@@ -128,6 +128,14 @@ def _offset(s: Array, k: Array) -> Array:
     return jnp.stack([((2 * i + 1) * one + k) // (2 * k), ((2 * j + 1) * one + k) // (2 * k)])
 
 
+def _shade_samples(covered, points_of, shade_fn, out, chunk: int):
+    """One sample's covered pixels shaded: in one screen-sized launch by default (chunk 0),
+    else through the compacted dispatch in chunks of ``chunk``."""
+    if chunk == 0:
+        return dispatch.shade_in_place(covered, points_of, shade_fn, out)
+    return dispatch.shade(dispatch.WorkList.of(covered), points_of, shade_fn, out, chunk)
+
+
 def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Frame:
     """The reference image at k x k samples per pixel; k is traced (int32[]), so every k
     shares one compiled program. Only cfg's width, height and chunk are used."""
@@ -150,9 +158,8 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
             return surface_points(scene, camera, tri[items], bary[items], ddx[items], ddy[items])
 
         with jax.named_scope("shade"):
-            rgb, work = dispatch.shade(dispatch.WorkList.of(tri >= 0), points_of,
-                                       lambda p: shade(p, scene),
-                                       jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk or n_pix)
+            rgb, work = _shade_samples(tri >= 0, points_of, lambda p: shade(p, scene),
+                                       jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
         new = {"shade_invocations": work.invocations, "lanes": work.lanes,
                "chunks": work.chunks, "fragments": rc["fragments"],
                "work_items": rc["work_items"]}

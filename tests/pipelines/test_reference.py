@@ -130,6 +130,19 @@ def test_equals_rasterizer_samples_shaded_and_averaged(scene_a):
     np.testing.assert_array_equal(np.asarray(frame.aux["coverage"]), covered.any(axis=0))
 
 
+def test_the_in_place_launch_equals_the_compacted_one(scene_a):
+    """chunk 0 shades each sample in place in one screen-sized launch; chunk = W * H compacts
+    the covered pixels into one launch of the same size: the same image and the same counts."""
+    k, cam = 3, _camera()
+    in_place = render(scene_a, cam, _cfg(k))
+    compacted = render(scene_a, cam, _cfg(k, chunk=W * H))
+    np.testing.assert_array_equal(np.asarray(in_place.image), np.asarray(compacted.image),
+                                  err_msg="image: in place vs compacted")
+    for key in ("shade_invocations", "lanes", "chunks", "helper_lanes"):
+        assert int(in_place.counts[key]) == int(compacted.counts[key]), key
+    assert int(in_place.counts["chunks"]) == k * k  # one launch per sample, every one covered
+
+
 def test_box_filter_of_a_known_edge(scene_a):
     """Pixel 30 holds the edge at x = 30.3: 6 of the 8 cell columns are covered at k = 8."""
     img = np.asarray(render(scene_a, _camera(), _cfg(8)).image)
