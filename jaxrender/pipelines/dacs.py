@@ -159,10 +159,10 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     cov_f = covered.reshape(-1)
     thr = jnp.asarray(threshold, jnp.float32)
     t = {k: jnp.asarray(v) for k, v in tab.items() if k != "sizes"}
-    # A level shades a small part of its pixels (a few percent past the first level), so its
-    # work list is chunked for a sixteenth of the largest level, not for all of it: the idle
-    # lanes of each level's last chunk are work the GPU does.
-    level_chunk = dispatch.resolve_chunk(chunk, max(n_max // 16, 1))
+    # Chunked as a list of the largest level's size (65536 lanes at 1920x1080), not a
+    # sixteenth of it: with 4096-lane chunks DACS was bound by its 40-73 loop iterations (an
+    # H200 ran it 1.5-1.8x faster at 65536, idle lanes and all; benchmarks/RESULTS.md).
+    level_chunk = dispatch.resolve_chunk(chunk, n_max)
 
     def level_body(level, carry):
         img, needs, inv, lanes, chunks = carry
