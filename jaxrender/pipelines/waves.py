@@ -82,9 +82,8 @@ def segment_lanes(starts: Array, live: Array) -> Array:
     the atomics of a long segment (a 128x128 tile of one material is 16k items; the scatter
     took 0.9-1.2 ms of the visibility buffer's frame on an H200)."""
     n = starts.shape[0]
-    pos, n_seg = compact_indices(starts, n)
+    pos, _ = compact_indices(starts, n, fill_value=n)  # past the last segment: n, size 0
     live_before = jnp.concatenate([jnp.zeros((1,), jnp.int32),
                                    jnp.cumsum(live, dtype=jnp.int32)])  # [N + 1]
-    k = jnp.arange(n, dtype=jnp.int32)
-    end = jnp.where(k + 1 < n_seg, jnp.concatenate([pos[1:], jnp.full((1,), n, jnp.int32)]), n)
-    return jnp.where(k < n_seg, live_before[end] - live_before[pos], 0)
+    end = jnp.concatenate([pos[1:], jnp.full((1,), n, jnp.int32)])
+    return live_before[end] - live_before[pos]
