@@ -36,6 +36,16 @@ issue23)  # the pipelines over their fixed-cost target, per named scope (issue 2
   P deferred --scene room --top 8
   P object_space --scene thin --top 10
   P reference --scene room --top 12 --calls 2 --scope transform --scope raster --scope shade --scope reconstruct ;;
+issue23b)  # tenth session: what is left over 3 ms, and inside the shader (texture, shadow, lights)
+  SH="--scope shade --scope texture --scope shadow --scope lights"
+  FW="--scope fragments --scope alpha_test --scope depth_test --scope quads --scope resolve"
+  for sc in thin room; do P forward --scene $sc --top 14 $FW $SH; done
+  P visbuffer --scene room --top 12 --scope visibility --scope classify --scope broadcast $SH
+  P object_space --scene thin --top 12 --scope visibility --scope mark_allocate --scope resolve $SH
+  P deferred --scene glass --top 12 --scope visibility --scope transparent --scope sorted_blend $SH
+  P forward --scene glass --top 12 --scope fragments --scope transparent --scope sorted_blend $SH
+  P dacs --scene room --top 10 --scope visibility --scope decide --scope interpolate $SH
+  P reference --scene room --top 14 --calls 2 --scope transform --scope raster --scope reconstruct $SH ;;
 flags)
   XLA_FLAGS="--xla_gpu_enable_command_buffer=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE" P raster --resolution 640x360 --triangles 10000 --top 5
   XLA_FLAGS="--xla_gpu_enable_command_buffer=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE" P deferred --scene "$TARGET" --top 5 ;;

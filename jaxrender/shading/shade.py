@@ -106,6 +106,7 @@ def _normal_map(points: SurfacePoints, scene: Scene, effects: Effects) -> tuple[
     return jnp.where(has, mapped, n), jnp.where(has, jnp.clip(length, 0.0, 1.0), 1.0)
 
 
+@jax.named_scope("lights")
 def _lights(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, albedo: Array,
             spec_params) -> Array:
     """Sum over all directional and point lights of f * E * cos, [N, 3]."""

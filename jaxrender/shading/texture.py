@@ -3,6 +3,7 @@ derivatives, bilinear per level, trilinear between levels, an anisotropic option
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from jaxrender.scene.textures import Textures
@@ -59,6 +60,7 @@ def trilinear(tex: Textures, tex_id: Array, uv: Array, lod: Array) -> Array:
     return (1.0 - t) * bilinear_level(tex, tex_id, uv, i0) + t * bilinear_level(tex, tex_id, uv, i1)
 
 
+@jax.named_scope("texture")
 def sample(tex: Textures, tex_id: Array, uv: Array, duv_dx: Array, duv_dy: Array,
            aniso_taps: int = 1) -> Array:
     """Filtered texture lookup -> float32[N, 4].
