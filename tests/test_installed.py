@@ -3,8 +3,8 @@
 where built-in presets, scene files and studies must be found and a local ``configs/`` must
 override them.
 
-Every run here shares one jaxrender cache (references and compiled programs), so what the
-README example compiles, the installed command line loads."""
+Every run here shares one jaxrender cache (references, and compiled programs where a cache is
+on), so what the README example renders, the installed command line loads."""
 
 from __future__ import annotations
 
@@ -71,18 +71,21 @@ def readme_python_example() -> str:
     return section.split("```python\n", 1)[1].split("```", 1)[0]
 
 
-def test_readme_python_example_runs_as_written(shared_cache, tmp_path):
-    # In a fresh interpreter, as a user runs it, not in this long-lived test worker: a
-    # worker that had compiled hundreds of programs crashed once inside XLA:CPU's compiler
-    # while the example compiled its own (2026-12-03; alone it passed every time).
+def test_readme_python_example_runs_as_written(installed, tmp_path):
+    # In a fresh interpreter of the installed wheel, from a folder outside the repository, as a
+    # user runs it (not in this long-lived test worker: a worker that had compiled hundreds of
+    # programs crashed once inside XLA:CPU's compiler while the example compiled its own).
+    # Its last line runs the bundled quickstart by name, so this is also the check that a
+    # bundled study resolves from anywhere and writes under the working directory.
+    bin_dir, env = installed
     script = tmp_path / "readme_example.py"
     script.write_text(readme_python_example() + CHECKS)
-    env = dict(os.environ, JAXRENDER_CACHE=str(shared_cache))
-    printed = run([sys.executable, str(script)], cwd=tmp_path, env=env)
+    printed = run([bin_dir / "python", str(script)], cwd=tmp_path, env=env)
     found = json.loads(printed.rsplit("CHECKS ", 1)[1])
     assert found["shape"] == [8, 72, 128, 3], found
     assert math.isfinite(found["psnr"]) and found["psnr"] > 10, found
     assert found["rows"] and (tmp_path / "runs/quickstart/results.csv").is_file(), found
+    assert Path(found["module"]).is_relative_to(bin_dir.parent), found
     assert re.search(r"\d+ shaded pixels, \d+\.\d dB", printed), printed
 
 
@@ -90,7 +93,7 @@ def test_readme_python_example_runs_as_written(shared_cache, tmp_path):
 CHECKS = """
 import json as _json
 print("CHECKS " + _json.dumps({"shape": list(frames.image.shape), "psnr": float(psnr),
-                                "rows": len(run.rows)}))
+                                "rows": len(run.rows), "module": jaxrender.__file__}))
 """
 
 
@@ -140,14 +143,15 @@ def test_installed_package_imports_from_its_venv(installed, tmp_path):
         f"jaxrender imported from {where}, not from the fresh venv {bin_dir.parent}")
 
 
-def test_bundled_study_by_name_writes_under_the_working_directory(installed, tmp_path):
+def test_bundled_studies_are_listed_and_resolve_by_name(installed, tmp_path):
+    # Running one by name is the README example's last line (above); the command line
+    # resolves the same names.
     bin_dir, env = installed
     listing = run([bin_dir / "jaxrender", "studies"], cwd=tmp_path, env=env)
     assert "quickstart" in listing, listing
-    run([bin_dir / "jaxrender", "study", "quickstart", "--resolution", "32x18", "--frames",
-         "1"], cwd=tmp_path, env=env)
-    rows = (tmp_path / "runs/quickstart/results.csv").read_text().splitlines()
-    assert len(rows) > 1, f"no result rows in runs/quickstart/results.csv: {rows}"
+    checked = run([bin_dir / "jaxrender", "validate", "quickstart"], cwd=tmp_path, env=env)
+    assert "quickstart: ok" in checked, checked
+    assert not (tmp_path / "runs").exists(), "validate wrote a run folder"
 
 
 def test_builtin_presets_then_a_local_override(installed, tmp_path):

@@ -135,6 +135,17 @@ def mark_chunks(t: Taps, n_chunks: int) -> Array:
     return _mark(jnp.where(t.weight > 0.0, t.chunk, n_chunks).reshape(-1), n_chunks)
 
 
+def mark_slot_shadels(t: Taps, page: Array, capacity: int) -> Array:
+    """bool[capacity * 64]: the shadels of the store's slots that some tap with non-zero weight
+    reads (``page`` int32[NC]: each virtual chunk's slot, -1 for none; a tap of a chunk without
+    a slot marks nothing). Without an allocation overflow it is ``mark_shadels`` restricted to
+    the allocated chunks, at the store's size instead of the virtual sheet's."""
+    n = capacity * CHUNK * CHUNK
+    slot = page[jnp.maximum(t.chunk, 0)]
+    addr = jnp.where((t.weight > 0.0) & (slot >= 0), slot * (CHUNK * CHUNK) + t.lane, n)
+    return _mark(addr.reshape(-1), n)
+
+
 def mark_shadels(t: Taps, n_chunks: int) -> Array:
     """bool[NC * 64]: the virtual shadels some tap with non-zero weight reads."""
     n = n_chunks * CHUNK * CHUNK

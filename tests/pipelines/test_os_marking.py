@@ -4,7 +4,7 @@ chunk (the marking scatter's hard case), zero-weight taps and empty pixels."""
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.pipelines.os_marking import Taps, mark_chunks, mark_shadels
+from jaxrender.pipelines.os_marking import Taps, mark_chunks, mark_shadels, mark_slot_shadels
 from jaxrender.pipelines.os_sheet import LANES
 
 
@@ -28,3 +28,15 @@ def test_marking_equals_numpy(rng):
     np.testing.assert_array_equal(np.asarray(mark_shadels(t, n_chunks)), want_s,
                                   err_msg="shadels read by a tap of non-zero weight")
     assert 0 < want_c.sum() < n_chunks  # both outcomes occur
+
+    # The same shadels addressed by store slot: a random page table with some chunks unallocated
+    # (their taps mark nothing), as object_space's counts read them.
+    cap = 100
+    page = np.full(n_chunks, -1, np.int32)
+    page[rng.permutation(n_chunks)[:cap]] = rng.permutation(cap)
+    want_slot = np.zeros(cap * LANES, bool)
+    ok = use & (page[chunk] >= 0)
+    want_slot[(page[chunk] * LANES + lane)[ok]] = True
+    np.testing.assert_array_equal(np.asarray(mark_slot_shadels(t, jnp.asarray(page), cap)),
+                                  want_slot, err_msg="shadels of allocated slots read by a tap")
+    assert 0 < ok.sum() < use.sum()  # taps of allocated and of unallocated chunks both occur
