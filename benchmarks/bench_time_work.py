@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import time
 
 import jax
@@ -36,31 +35,48 @@ def visibility_program(scene, camera, cfg):
     return jax.jit(lambda s, c: visibility(s, c, cfg).tri_id)
 
 
-def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repeats: int):
-    """One row: median and min ms of the steady-state frame, compile seconds, counts."""
+def visibility_sequence_program(scene, path, cfg):
+    """The visibility pass of every camera of ``path`` in one program, as a sequence runs it."""
+    from jaxrender.pipelines.visibility import visibility
+
+    return jax.jit(lambda s, p: jax.lax.map(lambda c: visibility(s, c, cfg).tri_id, p))
+
+
+def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repeats: int,
+            frames: int = 0):
+    """One row: median and min ms of the steady-state frame, compile seconds, counts. With
+    ``frames``, the frame's time inside a sequence of that many frames (a pan at 1 px/frame,
+    one program, as studies time a frame): the sequence's time over ``frames``, counts the mean
+    over its frames. Without, one single-frame call (its per-call overhead included)."""
     from jaxrender.pipelines import get_pipeline, make_config
     from jaxrender.pipelines import program
     from jaxrender.scene import default_camera
+    from jaxrender.scene.camera_path import pan
     from jaxrender.shading import load_lit_scene
 
     scene = load_lit_scene(scene_name, effects={"shader_cost": cost})
     camera = default_camera(scene)
+    cams = pan(camera, frames, 1.0, height).cameras if frames else camera
+    per = max(frames, 1)
     name, params = parse_spec(spec, "--pipelines")
-    row = dict(scene=scene_name, pipeline=spec, shader_cost=cost, resolution=f"{width}x{height}")
+    row = dict(scene=scene_name, pipeline=spec, shader_cost=cost, resolution=f"{width}x{height}",
+               frames=frames)
     t0 = time.perf_counter()
     if name == "visibility":
         cfg = make_config("deferred", width=width, height=height)
-        call = visibility_program(scene, camera, cfg).lower(scene, camera).compile()
+        make = visibility_sequence_program if frames else visibility_program
+        call = make(scene, cams, cfg).lower(scene, cams).compile()
         row["compile_s"] = time.perf_counter() - t0
-        _, median, samples = time_call(call, scene, camera, repeats=repeats, warmup=2)
-        return dict(row, median_ms=median, min_ms=min(samples), shade_invocations=0)
+        _, median, samples = time_call(call, scene, cams, repeats=repeats, warmup=2)
+        return dict(row, median_ms=median / per, min_ms=min(samples) / per, shade_invocations=0)
     cfg = make_config(name, width=width, height=height, **params)
-    call, _ = program.compile(get_pipeline(name), scene, camera, cfg)
+    call, _ = program.compile(get_pipeline(name), scene, cams, cfg, sequence=bool(frames))
     row["compile_s"] = time.perf_counter() - t0
-    frame, median, samples = time_call(call, scene, camera, repeats=repeats, warmup=2)
-    counts = {k: float(np.asarray(v)) for k, v in frame.counts.items() if np.ndim(v) == 0}
+    frame, median, samples = time_call(call, scene, cams, repeats=repeats, warmup=2)
+    counts = {k: float(np.mean(np.asarray(v))) for k, v in frame.counts.items()
+              if np.ndim(v) == (1 if frames else 0)}
     keep = ("shade_invocations", "lanes", "dispatch_lanes", "fragments", "waves", "overflow")
-    return dict(row, median_ms=median, min_ms=min(samples),
+    return dict(row, median_ms=median / per, min_ms=min(samples) / per,
                 **{k: counts[k] for k in keep if k in counts})
 
 
@@ -88,6 +104,9 @@ def main(argv=None) -> int:
     ap.add_argument("--budget", type=float, default=0.0, help="seconds; 0: no limit")
     ap.add_argument("--out", default="time_work.jsonl")
     ap.add_argument("--label", default="", help="a tag written into every row (e.g. 'before')")
+    ap.add_argument("--frames", type=int, default=0,
+                    help="time each frame inside a sequence of this many frames (how studies "
+                         "time a frame); 0: single-frame calls")
     a = ap.parse_args(argv)
     w, h = a.resolution
     t_start = time.time()
@@ -100,7 +119,7 @@ def main(argv=None) -> int:
                     row = dict(scene=scene, pipeline=spec, shader_cost=cost, skipped="budget")
                 else:
                     try:
-                        row = measure(scene, spec, cost, w, h, a.repeats)
+                        row = measure(scene, spec, cost, w, h, a.repeats, a.frames)
                     except Exception as e:  # noqa: BLE001 - a failed row is kept with its reason
                         row = dict(scene=scene, pipeline=spec, shader_cost=cost,
                                    error=f"{type(e).__name__}: {e}"[:300])
