@@ -2,6 +2,11 @@
 per (scene, pipeline) a least-squares line through (work, ms): the fixed cost and the slope.
 
     python benchmarks/bench_time_work.py --scenes foliage terrain --costs 0 8 32 --out rows.jsonl
+    python benchmarks/bench_time_work.py --frames 8 ...   # each frame inside an 8-frame sequence
+
+Without ``--frames`` a frame is one single-frame call, whose per-call overhead (1.2-2.1 ms on
+an H200 at 1080p, RESULTS.md) adds to every intercept; with it, the time per frame of one
+sequence program, as studies time frames.
 
 Work is ``shade_invocations x (1 + shader_cost)`` (one unit: one light layer evaluated at one
 shaded point, ``Effects.shader_cost``). ``visibility`` is the visibility pass alone (what
