@@ -36,8 +36,8 @@ issue23)  # the pipelines over their fixed-cost target, per named scope (issue 2
   P deferred --scene room --top 8
   P object_space --scene thin --top 10
   P reference --scene room --top 12 --calls 2 --scope transform --scope raster --scope shade --scope reconstruct ;;
-issue23b)  # tenth session: what is left over 3 ms, and inside the shader (texture, shadow, lights)
-  SH="--scope shade --scope texture --scope shadow --scope lights"
+issue23b)  # tenth session: what is left over 3 ms, and inside the shader
+  SH="--scope shade --scope texture --scope shadow_lookup --scope lights"
   FW="--scope fragments --scope alpha_test --scope depth_test --scope quads --scope resolve"
   for sc in thin room; do P forward --scene $sc --top 14 $FW $SH; done
   P visbuffer --scene room --top 12 --scope visibility --scope classify --scope broadcast $SH

@@ -207,8 +207,9 @@ def shadel_points(scene, camera, sheet: ShadeSheet, slot_chunk: Array, items: Ar
 
 class Residency(NamedTuple):
     """The store after marking and allocation: ``al`` (os_alloc's Allocation), ``live`` bool[cap]
-    (slots in use), ``owned_slot`` bool[cap, 64] (the slot's shadels with an owner triangle), ``reused`` bool[cap] (slots whose colours are kept from the previous frame),
-    ``colour`` float32[cap * 64, 3] (the kept colours, 0 elsewhere) and, with bias_feedback,
+    (slots in use), ``owned_slot`` bool[cap, 64] (the slot's shadels with an owner triangle),
+    ``reused`` bool[cap] (slots whose colours are kept from the previous frame), ``colour``
+    float32[cap * 64, 3] (the kept colours, 0 elsewhere) and, with bias_feedback,
     ``budget`` (os_budget's Budget; None without). Only the slots' rows of the sheet's owner
     map are read: the whole map is 64 shadels per virtual chunk (150 M on thin at 1080p)."""
 

@@ -55,7 +55,6 @@ def with_shadow_map(scene: Scene) -> Scene:
 
 
 @jax.named_scope("shadow_lookup")
-@jax.named_scope("shadow")
 def shadow_factor(sm: ShadowMap, position: Array, normal: Array, bias: float) -> Array:
     """Fraction of the first directional light reaching each point, float32[N, 1], by 2x2
     percentage-closer filtering. The point is pushed 1.5 texels along its geometric normal
