@@ -28,8 +28,7 @@ import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.os_alloc import allocate
 from jaxrender.pipelines.os_budget import budget_counts, check_config, feedback_allocate
-from jaxrender.pipelines.os_marking import (footprint, mark_chunks, mark_shadels,
-                                            mark_slot_shadels, taps)
+from jaxrender.pipelines.os_marking import footprint, mark_chunks, needed_shadels, taps
 from jaxrender.pipelines.os_memory import memory_counts
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
 from jaxrender.pipelines.registry import REGISTRY, register
@@ -313,34 +312,13 @@ def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
     return Frame(image, counts, share_visibility(aux, vis, cfg)), new_state
 
 
-def _needed_shadels(sheet, al, owned_slot):
-    """(needed bool[R, 64], owned bool[R, 64], row_of) over rows R of 64 shadels: the store's
-    slots or the virtual sheet's chunks, whichever is fewer (thin's sheet at 1080p has 2.3 M
-    chunks for a store of 194 k slots; a small scene's sheet is smaller than the store).
-    ``row_of(flags, v)`` reads a per-row flag at virtual chunk ``v``. Needed: read by some tap
-    of non-zero weight, and owned. The two agree unless the store overflowed, and then the
-    frame is flagged (counts["overflow"]): every chunk a tap reads is allocated."""
-    cap, nc = owned_slot.shape[0], sheet.n_chunks
-    if cap < nc:
-        needed = mark_slot_shadels(al.taps, al.page, cap).reshape(cap, LANES) & owned_slot
-
-        def row_of(flags, v):
-            slot = al.page[jnp.maximum(v, 0)]
-            return (slot >= 0) & flags[jnp.maximum(slot, 0)]
-
-        return needed, owned_slot, row_of
-    owned = sheet.owner.reshape(nc, LANES) >= 0
-    needed = mark_shadels(al.taps, nc).reshape(nc, LANES) & owned
-    return needed, owned, lambda flags, v: flags[v]
-
-
 def _counts(scene, sheet, cfg, fp, res: Residency, work: dispatch.WorkList, out: Resolved, vis):
     w, h = cfg.width, cfg.height
     nc = sheet.n_chunks
     al, owned_slot, reused = res.al, res.owned_slot, res.reused
     t = al.taps
     covered = jnp.sum(fp.covered, dtype=jnp.int32)
-    needed, owned, row_of = _needed_shadels(sheet, al, owned_slot)
+    needed, owned, row_of = needed_shadels(sheet, al.taps, al.page, owned_slot)
     need_n = jnp.sum(needed, axis=1, dtype=jnp.int32)
     own_n = jnp.sum(owned, axis=1, dtype=jnp.int32)
     alloc_shadels = jnp.sum(owned_slot, dtype=jnp.int32)

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from jaxrender.pipelines.os_sheet import CHUNK, ShadeSheet
+from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet
 from jaxrender.types import Array
 
 FRACTION = 256.0  # 8-bit LOD and bilinear fractions
@@ -150,3 +150,26 @@ def mark_shadels(t: Taps, n_chunks: int) -> Array:
     """bool[NC * 64]: the virtual shadels some tap with non-zero weight reads."""
     n = n_chunks * CHUNK * CHUNK
     return _mark(jnp.where(t.weight > 0.0, t.chunk * (CHUNK * CHUNK) + t.lane, n).reshape(-1), n)
+
+
+def needed_shadels(sheet: ShadeSheet, t: Taps, page: Array, owned_slot: Array):
+    """Object space's needed shadels of taps ``t`` (read by a tap of non-zero weight, and
+    owned), given the store's ``page`` table and its slots' owned bits bool[cap, 64]:
+    (needed bool[R, 64], owned bool[R, 64], row_of) over rows R of 64 shadels: the store's
+    slots or the virtual sheet's chunks, whichever is fewer (thin's sheet at 1080p has 2.3 M
+    chunks for a store of 194 k slots; a small scene's sheet is smaller than the store).
+    ``row_of(flags, v)`` reads a per-row flag at virtual chunk ``v``. The two agree unless the
+    store overflowed, and then the frame is flagged (counts["overflow"]): every chunk a tap
+    reads is allocated."""
+    cap, nc = owned_slot.shape[0], sheet.n_chunks
+    if cap < nc:
+        needed = mark_slot_shadels(t, page, cap).reshape(cap, LANES) & owned_slot
+
+        def row_of(flags, v):
+            slot = page[jnp.maximum(v, 0)]
+            return (slot >= 0) & flags[jnp.maximum(slot, 0)]
+
+        return needed, owned_slot, row_of
+    owned = sheet.owner.reshape(nc, LANES) >= 0
+    needed = mark_shadels(t, nc).reshape(nc, LANES) & owned
+    return needed, owned, lambda flags, v: flags[v]
