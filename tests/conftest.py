@@ -47,3 +47,26 @@ def _jax_cache_setting_restored():
         jax.config.update(name, value)
     if changed:
         compilation_cache.reset_cache()
+
+
+# The files that take longest on the 2-core CI machine (pytest --durations, 2026-12-03), handed
+# to the xdist workers first: with --dist loadfile a file runs whole on one worker, and one of
+# them started last (test_installed.py, minutes of subprocess compiles) left the other worker
+# idle at the end of the run.
+LONGEST_FIRST = (
+    "tests/test_installed.py", "tests/raster/test_spans.py", "tests/pipelines/test_object_space.py",
+    "tests/pipelines/test_tads.py", "tests/raster/test_donate.py",
+    "tests/pipelines/test_vertex_work.py", "tests/study/test_sequences.py",
+    "tests/study/test_runner.py", "tests/pipelines/test_visbuffer.py",
+    "tests/pipelines/test_micro_batch.py",
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {path: i for i, path in enumerate(LONGEST_FIRST)}
+    root = config.rootpath
+
+    def key(item):
+        return rank.get(item.path.relative_to(root).as_posix(), len(rank))
+
+    items.sort(key=key)  # stable: every other file keeps its collection order
