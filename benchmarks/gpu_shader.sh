@@ -2,13 +2,7 @@
 # The shader alone (bench_shader.py) from the tree before this change (.before/, from
 # `git archive <commit> jaxrender benchmarks pyproject.toml | tar -x -C .before`) and from this
 # one, side by side in one device call. carry: [".whl", ".before"]. Output under $OUT.
-set -u
-OUT=${OUT:?OUT must name an output folder}
-cd "$(dirname "$0")/.."
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
-  --target /tmp/site .whl/*.whl >/dev/null 2>&1 || echo "wheel install FAILED"
-export PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
-quiet() { grep -v "^WARNING\|^I0000\|^E0000\|^W0000"; }
+. "$(dirname "$0")/gpu_env.sh"
 SCENES=${SCENES:-room foliage stripes}
 for tree in before after; do
   root=$PWD; [ $tree = before ] && root=$PWD/.before

@@ -4,13 +4,7 @@
 # (bench_time_work.py: every pipeline, TADS too, at shader costs 0, 16 and 64; the fits).
 #   prepare: mkdir .before && git archive <commit> jaxrender benchmarks pyproject.toml | tar -x -C .before
 #   device run (carry .whl, .before): bash benchmarks/gpu_tenth.sh
-set -u
-OUT=${OUT:?OUT must name an output folder}
-cd "$(dirname "$0")/.."
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
-  --target /tmp/site .whl/*.whl || exit 1
-export PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
-quiet() { grep -v "^WARNING\|^I0000\|^E0000\|^W0000"; }
+. "$(dirname "$0")/gpu_env.sh"
 ARGS="--frames 16 --rounds 5 --no-single --scenes thin terrain room foliage --pipelines object_space"
 LOG=$OUT/tenth.md
 echo "## before" | tee -a "$LOG"
