@@ -1,10 +1,11 @@
-"""Lexicographic sorts of small non-negative integer keys through one packed integer key.
+"""Lexicographic sorts of small non-negative integer keys through packed integer keys.
 
-``lax.sort`` with several key operands compiles, on a GPU, to a comparison sort over every
-operand (about 40 passes over the fragments). When
-the keys' static ranges fit in 63 bits together they are packed into one int64 (or int32) and
-sorted with a permutation index: a single-key sort, which XLA hands to a radix sort, and the
-other operands follow through one gather.
+``lax.sort`` with several key operands, or with one key and a stable order, compiles on a GPU
+to a comparison sort (about 40 passes over an 8M-entry list). The keys are instead packed,
+with the entry's index as the least significant field, into one int64 (or int32) per entry:
+unique keys of a single operand, which XLA hands to a radix sort; the other operands follow
+through one gather. Keys whose static ranges do not fit 63 bits beside the index are sorted
+one group at a time, least significant first, each pass such a single-operand sort.
 """
 
 from __future__ import annotations
@@ -27,35 +28,63 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     returned as EMPTY. Returns (sorted keys, sorted payloads)."""
     keys = [jnp.asarray(k, jnp.int32) for k in keys]
     bits = [(int(lim) + 1).bit_length() for lim in limits]
-    idx = jnp.arange(keys[0].shape[0], dtype=jnp.int32)
-    if sum(bits) > 63:  # too wide to pack: a comparison sort on every key
-        codes = [jnp.where((k < 0) | (k > lim), EMPTY, k) for k, lim in zip(keys, limits)]
-        *out_keys, perm = jax.lax.sort((*codes, idx), num_keys=len(keys), is_stable=True)
-        return out_keys, [p[perm] for p in payloads]
-    # The entry's index as the last key when it fits: keys become unique, so the sort needs no
-    # stability and sorts one operand (a stable or two-operand sort may not be given to the
-    # radix sort: XLA's StableSortExpander rewrites its comparator).
-    idx_bits = max(int(keys[0].shape[0]) - 1, 1).bit_length()
-    with_index = sum(bits) + idx_bits <= 63
-    total = sum(bits) + (idx_bits if with_index else 0)
+    codes = [jnp.where((k < 0) | (k > lim), lim + 1, k) for k, lim in zip(keys, limits)]
+    n = keys[0].shape[0]
+    # The entry's index is the last key of every sort: keys become unique, so each sort needs
+    # no stability and sorts one operand. A stable or two-operand sort is not given to the
+    # radix sort (XLA's StableSortExpander rewrites its comparator) but to a comparison sort,
+    # about 40 passes over an 8M-entry list on a GPU; keys too wide for one packed key are
+    # sorted a group at a time, least significant first (an LSD radix sort over the groups).
+    idx_bits = max(int(n) - 1, 1).bit_length()
+    groups = key_groups(bits, 63 - idx_bits)
+    perm = None
+    for group in reversed(groups):
+        packed = pack([codes[i] if perm is None else codes[i][perm] for i in group],
+                      [bits[i] for i in group], idx_bits)
+        with jax.enable_x64(packed.dtype == jnp.int64):
+            packed = jax.lax.sort(packed, is_stable=False)
+            pos = (packed & ((1 << idx_bits) - 1)).astype(jnp.int32)
+        perm = pos if perm is None else perm[pos]
+        if len(groups) == 1:  # the sorted keys are in the packed key already
+            out_keys = unpack(packed, [bits[i] for i in group], idx_bits, limits)
+    if len(groups) > 1:
+        out_keys = [jnp.where(c[perm] > lim, EMPTY, c[perm]) for c, lim in zip(codes, limits)]
+    return out_keys, [p[perm] for p in payloads]
+
+
+def key_groups(bits: Sequence[int], room: int) -> list[list[int]]:
+    """Consecutive keys packed together, each group at most ``room`` bits (the last key of a
+    group the least significant); the least significant keys fill their group first."""
+    groups, width = [[]], 0
+    for i in reversed(range(len(bits))):
+        if groups[0] and width + bits[i] > room:
+            groups.insert(0, [])
+            width = 0
+        groups[0].insert(0, i)
+        width += bits[i]
+    return groups
+
+
+def pack(codes: Sequence[Array], bits: Sequence[int], idx_bits: int) -> Array:
+    """(code_0 ... code_k, entry index) as one int32 or int64, code_0 most significant."""
+    total = sum(bits) + idx_bits
     with jax.enable_x64(total > 31):
         wide = jnp.int64 if total > 31 else jnp.int32
-        packed = jnp.zeros(keys[0].shape, wide)
-        for k, lim, b in zip(keys, limits, bits):
-            code = jnp.where((k < 0) | (k > lim), lim + 1, k).astype(wide)
-            packed = (packed << b) | code
-        if with_index:
-            packed = jax.lax.sort((packed << idx_bits) | idx.astype(wide), is_stable=False)
-            perm = (packed & ((1 << idx_bits) - 1)).astype(jnp.int32)
-            packed = packed >> idx_bits
-        else:
-            packed, perm = jax.lax.sort((packed, idx), num_keys=1, is_stable=True)
-        out_keys, shift = [], sum(bits)
+        packed = jnp.zeros(codes[0].shape, wide)
+        for code, b in zip(codes, bits):
+            packed = (packed << b) | code.astype(wide)
+        return (packed << idx_bits) | jnp.arange(codes[0].shape[0], dtype=wide)
+
+
+def unpack(packed: Array, bits: Sequence[int], idx_bits: int, limits) -> list[Array]:
+    """The int32 keys of a sorted ``pack``, EMPTY where a code is past its limit."""
+    out, shift = [], sum(bits) + idx_bits
+    with jax.enable_x64(packed.dtype == jnp.int64):
         for lim, b in zip(limits, bits):
             shift -= b
             v = ((packed >> shift) & ((1 << b) - 1)).astype(jnp.int32)
-            out_keys.append(jnp.where(v > lim, EMPTY, v))
-    return out_keys, [p[perm] for p in payloads]
+            out.append(jnp.where(v > lim, EMPTY, v))
+    return out
 
 
 # The prefix lengths ``lex_sort_prefix`` sorts, as fractions of the list: a fragment list's

@@ -8,7 +8,7 @@ from jaxrender.sorting import EMPTY, lex_sort
 
 
 @pytest.mark.parametrize("limits", [(3, 100), (7, 2**20, 2**17), (2**24, 2**26, 2**5),
-                                    (2**31 - 2, 2**31 - 2, 5)])
+                                    (2**31 - 2, 2**31 - 2, 5), (2**30,) * 4, (2**20, 2**30)])
 def test_lex_sort_equals_numpy_lexsort(limits):
     rng = np.random.default_rng(len(limits) + limits[0] % 97)
     n = 3000
@@ -22,6 +22,15 @@ def test_lex_sort_equals_numpy_lexsort(limits):
         np.testing.assert_array_equal(np.asarray(g), k[order], err_msg=f"key {i} differs")
     np.testing.assert_array_equal(np.asarray(got_payload), payload[order],
                                   err_msg="payload not carried in the stable order")
+
+
+def test_key_groups_fill_from_the_least_significant_key():
+    from jaxrender.sorting import key_groups
+
+    assert key_groups([21, 30], 63 - 23) == [[0], [1]]  # 8M entries: pixel, depth
+    assert key_groups([21, 30], 63 - 12) == [[0, 1]]
+    assert key_groups([3, 31, 31, 5], 51) == [[0, 1], [2, 3]]
+    assert key_groups([31, 31, 31], 31) == [[0], [1], [2]]
 
 
 @pytest.mark.parametrize("count", [0, 1, 700, 750, 751, 2999, 3000])

@@ -74,7 +74,8 @@ def blend_layers(scene, camera, blended: Blended | None, rows: Array, image: Arr
         a = jnp.where(blended.front, opacity(pts, scene), 0.0)
         z = jnp.sum((pts.position - camera.eye[None, :]) * camera.forward[None, :], axis=-1)
         values = jnp.concatenate([rows[w * h:], a[:, None], z[:, None]], axis=-1)
-        layers = Layers(fr.pixel, fr.tri, fr.depth, blended.front, values)
+        layers = Layers(fr.pixel, fr.tri, fr.depth, blended.front, values,
+                        jnp.minimum(fr.count, fr.pixel.shape[0]))
         out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return out.reshape(h, w, 3), counts

@@ -46,7 +46,7 @@ from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
 from jaxrender.shading import opacity, shade, surface_points
-from jaxrender.sorting import lex_sort
+from jaxrender.sorting import lex_sort, lex_sort_prefix
 from jaxrender.types import Array
 
 LAYER_BYTES = 20  # a k-buffer entry: premultiplied RGB and transmittance (4 float32), a depth
@@ -102,13 +102,15 @@ def layer_shader(scene, camera):
 class Layers(NamedTuple):
     """Transparent fragments of one sample: pixel, tri, depth int32/float32[F]; front bool[F]
     (in front of the opaque depth: the ones shaded and blended); values float32[F, 5]
-    (``layer_shader``'s, valid where front)."""
+    (``layer_shader``'s, valid where front); live int32[] or None: no entry at or past it is
+    front (a fragment list's filled prefix), so the composite sorts only that prefix."""
 
     pixel: Array
     tri: Array
     depth: Array
     front: Array
     values: Array
+    live: Array | None = None
 
 
 def in_front(fr, opaque_depth: Array, n_pix: int) -> Array:
@@ -130,7 +132,8 @@ def shade_layers(scene, camera, fr, front, points_of, chunk: int):
     values = jnp.zeros((front.shape[0], LAYER_CHANNELS), jnp.float32)
     values, work = dispatch.shade(dispatch.WorkList.of(front), points_of,
                                   layer_shader(scene, camera), values, chunk)
-    return Layers(fr.pixel, fr.tri, fr.depth, front, values), work
+    live = jnp.minimum(fr.count, fr.pixel.shape[0])
+    return Layers(fr.pixel, fr.tri, fr.depth, front, values, live), work
 
 
 def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
@@ -216,8 +219,13 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
         order, limit = ONE_BITS - bits, ONE_BITS  # far first
     else:
         order, limit = layers.tri, scene.num_triangles - 1  # first drawn first
-    key = jnp.where(layers.front, layers.pixel, n_pix)  # out of range: sorts last
-    (pix, _), (premult, trans) = lex_sort((key, order), (n_pix - 1, limit), (premult, trans))
+    # Out of range, so sorted last: every key of the entries not blended.
+    keys = (jnp.where(layers.front, layers.pixel, n_pix), jnp.where(layers.front, order, limit + 1))
+    if layers.live is None:
+        (pix, _), (premult, trans) = lex_sort(keys, (n_pix - 1, limit), (premult, trans))
+    else:
+        (pix, _), (premult, trans) = lex_sort_prefix(keys, (n_pix - 1, limit), (premult, trans),
+                                                     layers.live)
     live = pix < n_pix
     rank = jnp.arange(pix.shape[0], dtype=jnp.int32) - first_of_segment_index(segment_starts(pix))
     deepest = jnp.max(per_pixel)
@@ -310,7 +318,8 @@ def forward_blend(scene, draw, front, values, image, counts: dict, cfg):
     if front is None:
         return image, counts
     h, w = image.shape[:2]
-    layers = Layers(draw.pixel, draw.tri, draw.depth, front, values)
+    live = jnp.minimum(draw.fragments, draw.pixel.shape[0])  # one sample: a sorted prefix
+    layers = Layers(draw.pixel, draw.tri, draw.depth, front, values, live)
     with jax.named_scope("transparent"):
         out, extra = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts = dict(counts, **{k: v for k, v in extra.items() if k != "overflow"},
