@@ -37,7 +37,7 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines.base import BLENDING_DEFAULTS
-from jaxrender.pipelines.quads import first_of_segment_index, segment_starts
+from jaxrender.pipelines.quads import segment_starts
 from jaxrender.pipelines.visibility import (clip_vertices, faces_where, is_transparent, points_at,
                                             raster_fragments)
 from jaxrender.raster.fragments import collect_fragments
@@ -226,8 +226,12 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
     else:
         (pix, _), (premult, trans) = lex_sort_prefix(keys, (n_pix - 1, limit), (premult, trans),
                                                      layers.live)
-    live = pix < n_pix
-    rank = jnp.arange(pix.shape[0], dtype=jnp.int32) - first_of_segment_index(segment_starts(pix))
+    n_entries = pix.shape[0]
+    # Each pixel's layers lie together in the sorted list, farthest first, from its first
+    # entry on: a pass reads layers k cap .. k cap + cap - 1 of every pixel from there.
+    starts = segment_starts(pix) & (pix < n_pix)
+    first = jnp.zeros((n_pix,), jnp.int32).at[jnp.where(starts, pix, n_pix)].set(
+        jnp.arange(n_entries, dtype=jnp.int32), mode="drop")
     deepest = jnp.max(per_pixel)
     if settings.overflow == "chunks":
         passes, overflow = (deepest + cap - 1) // cap, jnp.int32(0)
@@ -236,15 +240,12 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
         overflow = (deepest > cap).astype(jnp.int32)
 
     def one_pass(k, image):
-        slot = rank - k * cap
-        inside = live & (slot >= 0) & (slot < cap)
-        dest = jnp.where(inside, pix * cap + slot, n_pix * cap)
-        buf_c = jnp.zeros((n_pix * cap, 3), jnp.float32).at[dest].set(premult, mode="drop")
-        buf_t = jnp.ones((n_pix * cap,), jnp.float32).at[dest].set(trans, mode="drop")
-        buf_c, buf_t = buf_c.reshape(n_pix, cap, 3), buf_t.reshape(n_pix, cap)
-
         def blend(slot_i, img):  # back to front inside the pass: slot 0 is the farthest
-            return buf_c[:, slot_i] + buf_t[:, slot_i, None] * img
+            layer = k * cap + slot_i
+            at = jnp.where(layer < per_pixel, first + layer, n_entries)  # none: 0 + 1 img
+            c = premult.at[at].get(mode="fill", fill_value=0.0)
+            t = trans.at[at].get(mode="fill", fill_value=1.0)
+            return c + t[:, None] * img
 
         return jax.lax.fori_loop(0, cap, blend, image)
 
