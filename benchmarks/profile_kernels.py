@@ -72,7 +72,7 @@ def hlo_sources(fn, *args) -> dict[str, str]:
 
 
 def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
-                 scopes: tuple[str, ...] = ()) -> dict:
+                 scopes: tuple[str, ...] = (), copies: bool = False) -> dict:
     """Trace ``calls`` steady-state calls of ``fn(*args)`` and print the kernel table; with
     ``scopes``, also the kernel time whose source lies under each named scope."""
     fn = jax.jit(fn)
@@ -107,6 +107,8 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
         ms = sum(us for n, us in total.items()
                  if f"{scope}/" in sources.get(n.replace(".", "_"), "")) / calls / 1e3
         print(f"scope {scope}: kernels {ms:.3f} ms/call")
+    if copies:
+        print_copy_neighbours(events, sources, calls)
     print("| kernel | ms/call | launches/call | from |\n|---|---:|---:|---|")
     for name, us in sorted(total.items(), key=lambda kv: -kv[1])[:top]:
         print(f"| {name[:48]} | {us / calls / 1e3:.3f} | {count[name] / calls:.0f} | "
@@ -115,6 +117,24 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
             "launches": len(events) / calls,
             "top": sorted(((n, t / calls / 1e3, count[n] / calls) for n, t in total.items()),
                           key=lambda r: -r[1])[:top]}
+
+
+def print_copy_neighbours(events, sources: dict, calls: int) -> None:
+    """Copies carry no HLO name (a conditional's or a loop's buffers, say): name each by the
+    kernels launched just before and after it, so it can be traced to the code around it."""
+    ev = sorted(events, key=lambda e: e[2])
+    where = collections.defaultdict(float)
+    for i, (name, us, _) in enumerate(ev):
+        if "memcpy" not in name.lower():
+            continue
+        around = []
+        for j in (i - 1, i + 1):
+            if 0 <= j < len(ev) and "memcpy" not in ev[j][0].lower():
+                around.append(sources.get(ev[j][0].replace(".", "_"), ev[j][0])[-50:])
+        where[(name[:16], " / ".join(around))] += us
+    print("| copy | ms/call | kernels before / after |\n|---|---:|---|")
+    for (name, around), us in sorted(where.items(), key=lambda kv: -kv[1])[:12]:
+        print(f"| {name} | {us / calls / 1e3:.3f} | {around} |")
 
 
 def device_span_ms(events, calls: int) -> float:
@@ -149,6 +169,8 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=0,
                     help="profile a still camera's sequence of this many frames (state carried: "
                          "TAA's resolve runs); 0: one frame")
+    ap.add_argument("--copies", action="store_true",
+                    help="also name the device copies by the kernels around them")
     ap.add_argument("--scope", action="append", default=[],
                     help="sum the kernel time under this named scope (e.g. taa)")
     args = ap.parse_args(argv)
@@ -194,10 +216,10 @@ def main(argv=None) -> int:
             return frame
 
         profile_call(one_frame, sc, cam, static, calls=args.calls, top=args.top, label=label,
-                     scopes=scopes)
+                     scopes=scopes, copies=args.copies)
         return 0
     profile_call(lambda s, c: pipe.render(s, c, cfg), sc, cam, calls=args.calls, top=args.top,
-                 label=label, scopes=scopes)
+                 label=label, scopes=scopes, copies=args.copies)
     return 0
 
 
