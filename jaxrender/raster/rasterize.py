@@ -231,7 +231,7 @@ TRAVERSALS = ("auto", "cpu", "gpu", "bbox", "spans", "recompute")
 
 
 def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state, fn,
-             traversal="auto"):
+             traversal="auto", peel=True):
     """Run ``state = fn(state, chunk)`` over every work chunk of every triangle, clipped or not.
 
     Triangles that need no clipping come first, in submission order; triangles crossing a
@@ -241,20 +241,22 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     "gpu" by the platform the program is lowered for; "cpu": spans, or bounding boxes below
     SPANS_MIN_PIXELS; "gpu": per-item setup ("recompute") where triangles are dense, else
     bounding boxes, first chunk peeled and the clip chunks in the coverage loop; or one of
-    ``coverage.TRAVERSALS`` everywhere (test hooks).
+    ``coverage.TRAVERSALS`` everywhere (test hooks). ``peel=False``: "gpu" runs every chunk
+    and the clip chunks in two plain loops, for a state too large to pass through the
+    conditional that joins them (XLA copies the state into and out of it at every step).
     """
     if traversal not in TRAVERSALS:
         raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
     if traversal == "auto":
         def on(platform):
             return lambda c, f, o, st: traverse(c, f, width, height, cull, o, capacity,
-                                                clip_cap, st, fn, platform)
+                                                clip_cap, st, fn, platform, peel)
 
         return jax.lax.platform_dependent(clip, faces, offset, state, cpu=on("cpu"),
                                           default=on("gpu"))
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
-    peel = traversal == "gpu"
+    peel = peel and traversal == "gpu"
     if traversal == "cpu":
         traversal = "bbox" if width * height < SPANS_MIN_PIXELS else "spans"
     elif traversal == "gpu":

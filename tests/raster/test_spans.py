@@ -63,10 +63,10 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
     out = {tr: fragments_jit(jnp.asarray(clip), jnp.asarray(faces), width=W, height=H,
                              capacity=cap, cull_backfaces=False, offset=(128, 128),
                              work_capacity=4096, clip_capacity=64, traversal=tr)
-           for tr in ("bbox", "spans", "recompute")}
+           for tr in ("bbox", "spans", "recompute", "gpu")}  # gpu: unpeeled for fragments
     n = int(out["bbox"].count)
     assert 0 < n <= cap
-    for tr in ("spans", "recompute"):
+    for tr in ("spans", "recompute", "gpu"):
         assert int(out[tr].count) == n, tr
         for name in ("pixel", "tri", "depth"):
             a, b = getattr(out["bbox"], name), getattr(out[tr], name)
