@@ -181,9 +181,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
         with jax.named_scope("interpolate"):
             interp = jnp.sum(wts[:, :, None] * c, axis=1)
             val = jnp.where((cov & ~need)[:, None], interp, 0.0)
-            # A level's pixels are distinct; padding points past the end, each at its own index.
-            past = n_pix + jnp.arange(pix.shape[0], dtype=jnp.int32)
-            img = img.at[jnp.where(live, pix, past)].set(val, mode="drop", unique_indices=True)
+            img = img.at[jnp.where(live, pix, n_pix)].set(val, mode="drop")
         with jax.named_scope("shade"):
             listed = dispatch.WorkList.of(need)
             img, work = dispatch.run(dispatch.WorkList(pix[listed.items], listed.count),
