@@ -104,12 +104,10 @@ def collect_fragments(clip, faces, width: int, height: int, capacity: int, cull_
         def append(st, c):
             pix, tri, depth, n = st
             pos = n + jnp.cumsum(c.covered, dtype=jnp.int64) - 1
-            # Covered items take distinct positions; every other item points past the end at
-            # its own index, so the scatters are unique (plain stores on a GPU, no atomics).
-            past = capacity + jnp.arange(pos.shape[0], dtype=jnp.int64)
-            at = jnp.where(c.covered & (pos < capacity), pos, past)
-            put = lambda a, v: a.at[at].set(v, mode="drop", unique_indices=True)  # noqa: E731
-            pix, tri, depth = put(pix, c.py * width + c.px), put(tri, c.tri), put(depth, c.depth)
+            at = jnp.where(c.covered & (pos < capacity), pos, capacity)
+            pix = pix.at[at].set(c.py * width + c.px, mode="drop")
+            tri = tri.at[at].set(c.tri, mode="drop")
+            depth = depth.at[at].set(c.depth, mode="drop")
             return pix, tri, depth, n + jnp.sum(c.covered, dtype=jnp.int64)
 
         init = (
