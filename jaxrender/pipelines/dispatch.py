@@ -50,8 +50,7 @@ class WorkList:
     """A compacted work list and, once dispatched, what was launched for it.
 
     items int32[N]: item indices (pixels, samples, fragments, shadels), the first ``count``
-    live and distinct (``run`` writes their results with a scatter declared unique); count
-    int32[]: live items. After ``run`` (or ``shade``): ``chunk`` (static lanes per
+    live; count int32[]: live items. After ``run`` (or ``shade``): ``chunk`` (static lanes per
     chunk) and ``invocations`` (lanes that wrote a result: ``count``, or fewer for lane lists
     whose lanes are not one-to-one with outputs). ``chunks``, ``lanes`` and ``idle_lanes``
     follow from them.
@@ -164,14 +163,9 @@ def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
 
     def launch(start, size, acc):
         lane_items = jax.lax.dynamic_slice(padded, (start,), (size,))
-        lane = jnp.arange(size, dtype=jnp.int32)
-        live = start + lane < n
+        live = start + jnp.arange(size, dtype=jnp.int32) < n
         vals = fn(lane_items, live)
-        # A work list's items are distinct and the idle lanes point past the end, each at its
-        # own index: the scatter is declared unique, so a GPU stores each row plainly instead
-        # of through one atomic per element.
-        dest = jnp.where(live, lane_items, sentinel + lane)
-        return acc.at[dest].set(vals, mode="drop", unique_indices=True)
+        return acc.at[jnp.where(live, lane_items, sentinel)].set(vals, mode="drop")
 
     out, launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch, out, mode)
     return out, WorkList(items, n, n, chunk, launched)
