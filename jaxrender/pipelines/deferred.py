@@ -2,9 +2,8 @@
 pass shades every covered pixel once from the G-buffer.
 
 The G-buffer is real: the attribute pass writes the ``gbuffer.GBUFFER_LAYOUT`` channels of
-every covered pixel (sample) as float32 rows through the chunked dispatch, in its work list's
-order (one contiguous block per launch), and the lighting pass reads each sample's row back
-and calls the shared ``shade``. The bytes written and read
+every covered pixel (sample) into full-screen float32 planes through the chunked dispatch, and
+the lighting pass reads them back and calls the shared ``shade``. The bytes written and read
 are the planes' bytes times the pixels (samples) that the two work lists touched. Under MSAA
 the G-buffer holds every sample; lighting shades one representative sample per pixel and, with
 ``per_sample_shading``, also every sample whose surface differs from it.
@@ -68,17 +67,15 @@ class LightingPlan(NamedTuple):
 
 def gbuffer_pass(scene, camera, vis, n_samples: int, cfg):
     """The attribute pass: every covered sample's G-buffer row, through the chunked dispatch.
-    Returns (float32[S * P, GBUFFER_CHANNELS], its WorkList): row j is the sample
-    ``work.items[j]``'s, rows kept in the list's order (``dispatch.shade_listed``: written as
-    contiguous blocks, as a render target's rows are, not scattered one by one)."""
+    Returns (float32[S * P, GBUFFER_CHANNELS], its WorkList)."""
     n = n_samples * cfg.width * cfg.height
     tri = vis.tri_id.reshape(-1)
     flat = lambda a: a.reshape(n, 3)  # noqa: E731
     bary, ddx, ddy = flat(vis.bary), flat(vis.dbary_dx), flat(vis.dbary_dy)
-    return dispatch.shade_listed(
+    return dispatch.shade(
         dispatch.WorkList.of(tri >= 0),
         lambda it: surface_points(scene, camera, tri[it], bary[it], ddx[it], ddy[it]),
-        pack_gbuffer, GBUFFER_CHANNELS, cfg.chunk)
+        pack_gbuffer, jnp.zeros((n, GBUFFER_CHANNELS), jnp.float32), cfg.chunk)
 
 
 def lighting_plan(vis, n_samples: int, cfg: DeferredConfig) -> LightingPlan:
@@ -121,10 +118,8 @@ def frame(scene, camera, cfg: DeferredConfig) -> Frame:
     with jax.named_scope("plan"):
         plan = lighting_plan(vis, n_s, cfg)
     with jax.named_scope("lighting"):
-        row_of = dispatch.list_positions(attributes, gbuf.shape[0])  # sample -> G-buffer row
         lit, lighting = dispatch.shade(
-            plan.work,
-            lambda it: unpack_gbuffer(gbuf[row_of[it]], camera, jnp.ones(it.shape, bool)),
+            plan.work, lambda it: unpack_gbuffer(gbuf[it], camera, jnp.ones(it.shape, bool)),
             lambda pts: shade(pts, scene), jnp.zeros((gbuf.shape[0], 3), jnp.float32), cfg.chunk)
     with jax.named_scope("resolve"):
         image = resolve_samples(lit, plan, cfg)

@@ -194,43 +194,6 @@ def shade(
     return run(work, fn, out, chunk)
 
 
-def shade_listed(
-    work: WorkList,
-    points_of: Callable[[Array], object],
-    shade_fn: Callable[[object], Array],
-    channels: int,
-    chunk: int = DEFAULT_CHUNK,
-) -> tuple[Array, WorkList]:
-    """``shade`` with the results kept in the list's order: row j of float32[N, channels] holds
-    the result of item ``work.items[j]`` for j < count (rows past it are undefined). Each
-    launch writes its rows as one contiguous block instead of scattering them to their items,
-    for a consumer that reads them back through the same list (deferred's G-buffer)."""
-    items, n = work.items, work.count
-    chunk = int(min(resolve_chunk(chunk, items.shape[0]), max(items.shape[0], 1)))
-    mode = launch_mode()
-    max_chunks = max(-(-items.shape[0] // chunk), 1)
-    span = chunk if mode == "loop" else chunk << max(max_chunks - 1, 0).bit_length()
-    padded = jnp.concatenate([items, jnp.zeros((span,), items.dtype)])
-
-    def launch(start, size, acc):
-        lane_items = jax.lax.dynamic_slice(padded, (start,), (size,))
-        pts = points_of(lane_items)
-        live = start + jnp.arange(size, dtype=jnp.int32) < n
-        vals = shade_fn(dataclasses.replace(pts, valid=pts.valid & live))
-        return jax.lax.dynamic_update_slice(acc, vals.astype(acc.dtype), (start, 0))
-
-    rows = jnp.zeros((items.shape[0] + span, channels), jnp.float32)
-    rows, launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch, rows, mode)
-    return rows[:items.shape[0]], WorkList(items, n, n, chunk, launched)
-
-
-def list_positions(work: WorkList, n: int) -> Array:
-    """int32[n]: each live item's position in the list (0 for items not in it)."""
-    pos = jnp.arange(work.items.shape[0], dtype=jnp.int32)
-    return jnp.zeros((n,), jnp.int32).at[jnp.where(pos < work.count, work.items, n)].set(
-        pos, mode="drop")
-
-
 def dispatch_lanes(
     n: Array,
     fn: Callable[[Array, Array], tuple[Array, Array, Array]],

@@ -62,33 +62,6 @@ def test_every_launch_mode_writes_the_same_and_counts_its_lanes(rng, monkeypatch
     assert (int(done.invocations), int(done.chunks)) == (n_active, chunks), (mode, n_active)
 
 
-@pytest.mark.parametrize("mode", dispatch.LAUNCH_MODES)
-@pytest.mark.parametrize("n_active", [0, 1, 64, 65, 300])
-def test_shade_listed_keeps_the_lists_order(rng, monkeypatch, mode, n_active):
-    from jaxrender.types import SurfacePoints
-
-    monkeypatch.setenv(dispatch.ENV_LAUNCH, mode)
-    active = np.zeros(300, bool)
-    active[rng.choice(300, n_active, replace=False)] = True
-    work = dispatch.WorkList.of(jnp.asarray(active))
-    values = rng.random((300, 2)).astype(np.float32)
-
-    def points_of(items):  # only the position (the item's values) and the valid mask are read
-        n = items.shape[0]
-        v3, z = jnp.asarray(values)[items][:, [0, 1, 1]], jnp.zeros((n,), jnp.int32)
-        return SurfacePoints(v3, v3, v3, jnp.zeros((n, 4)), v3[:, :2], v3[:, :2], v3[:, :2], v3,
-                             z, z, jnp.ones((n,), bool))
-
-    rows, done = dispatch.shade_listed(
-        work, points_of, lambda p: jnp.where(p.valid[:, None], p.position[:, :2], -1.0), 2, 64)
-    live = np.nonzero(active)[0]
-    np.testing.assert_array_equal(np.asarray(rows)[:n_active], values[live], err_msg=mode)
-    assert rows.shape == (300, 2) and int(done.invocations) == n_active
-    assert int(done.chunks) == _chunks_launched(mode, n_active, 64), mode
-    pos = np.asarray(dispatch.list_positions(work, 300))
-    np.testing.assert_array_equal(pos[live], np.arange(n_active), err_msg="positions")
-
-
 def test_an_unknown_launch_mode_is_refused(monkeypatch):
     monkeypatch.setenv(dispatch.ENV_LAUNCH, "unrolled")
     with pytest.raises(ValueError, match="JAXRENDER_DISPATCH='unrolled'.*loop, switch, binary"):
