@@ -23,6 +23,7 @@ from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
 import jax
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
@@ -50,6 +51,16 @@ def _time(fn, *args) -> float:
     return time_call(fn, *args, repeats=1)[1]
 
 
+def _checksum(frames) -> dict:
+    """The sequence's image sum (float64 on the host) and total shading invocations."""
+    frame = frames[0] if isinstance(frames, tuple) else frames
+    counts = getattr(frame, "counts", {}) or {}
+    out = {"image_sum": float(np.asarray(frame.image, np.float64).sum())}
+    if "shade_invocations" in counts:
+        out["invocations"] = int(np.asarray(counts["shade_invocations"]).sum())
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", nargs="+", default=["terrain", "foliage"])
@@ -63,6 +74,9 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default=None, help="write the rows here")
     ap.add_argument("--no-single", action="store_true",
                     help="time the sequence only (how studies time a frame), not single calls")
+    ap.add_argument("--checksum", action="store_true",
+                    help="add each sequence's image sum and shading count to its row, to show "
+                         "that two variants (XLA flags, trees) rendered the same frames")
     a = ap.parse_args(argv)
     w, h = a.resolution
     names = a.pipelines or [p.name for p in list_pipelines()]
@@ -85,7 +99,7 @@ def main(argv=None) -> int:
         for (sname, name), (scene, path, fut) in jobs.items():
             try:
                 seq, one, seq_c, one_c = fut.result()
-                jax.block_until_ready(seq(scene, path))  # warm-up
+                frames = jax.block_until_ready(seq(scene, path))  # warm-up
                 singles = [_camera(path, i) for i in range(a.frames)] if one else []
                 if one:
                     jax.block_until_ready(one(scene, singles[0]))
@@ -99,6 +113,8 @@ def main(argv=None) -> int:
                 rows.append({"scene": sname, "pipeline": name, "sequence_ms_per_frame": s,
                              "single_ms": o, "ratio": s / o if o else None,
                              "compile_seq_s": seq_c, "compile_single_s": one_c})
+                if a.checksum:
+                    rows[-1].update(_checksum(frames))
             except Exception as e:  # noqa: BLE001 - a benchmark reports and goes on
                 rows.append({"scene": sname, "pipeline": name,
                              "error": f"{type(e).__name__}: {e}"[:160]})
