@@ -1,7 +1,9 @@
 """Strict numerics for every test (as Equinox does): implicit rank or dtype promotion is a bug."""
 
+import gc
 import os
 import zlib
+from pathlib import Path
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # Tests compile in threads (the fake scenes cannot be sent to worker processes); the process
@@ -47,6 +49,35 @@ def _jax_cache_setting_restored():
         jax.config.update(name, value)
     if changed:
         compilation_cache.reset_cache()
+
+
+def _mapped_regions() -> int:
+    with open("/proc/self/maps", "rb") as maps:
+        return sum(1 for _ in maps)
+
+
+def _map_limit() -> int | None:
+    try:
+        return int(Path("/proc/sys/vm/max_map_count").read_text())
+    except (OSError, ValueError):  # not Linux: no such limit to keep under
+        return None
+
+
+MAP_LIMIT = _map_limit()
+
+
+@pytest.fixture(autouse=True)
+def _compiled_programs_released():
+    # XLA:CPU maps a few memory regions for every kernel it loads (about a thousand for one
+    # pipeline program) and unmaps them only with the executable, which jax's caches keep for
+    # the life of the process. A worker that keeps the programs of a few hundred tests passes
+    # the kernel's vm.max_map_count, and the next compile segfaults inside XLA when its mmap
+    # fails (the CI crashes in test_exact and test_robust). Past half the limit, every cached
+    # program is dropped; the tests after it compile theirs again.
+    yield
+    if MAP_LIMIT is not None and _mapped_regions() > MAP_LIMIT // 2:
+        jax.clear_caches()
+        gc.collect()
 
 
 # The files that take longest on the 2-core CI machine (pytest --durations, 2026-12-03), handed
