@@ -23,8 +23,8 @@ from tqdm import tqdm
 
 from jaxrender import timing
 from jaxrender.errors import StudyError
-from jaxrender.study import (backend, cache, compile_cache, executables, matching, store,
-                             summary, time_series)
+from jaxrender.study import (backend, cache, compile_cache, executables, matching,
+                             program_batches, store, summary, time_series)
 from jaxrender.study import devices as devices_mod
 from jaxrender.study.programs import (compile_all, compile_variant, compile_workers,
                                       program_identity, program_key, rendered_path,
@@ -138,37 +138,71 @@ def _placement(study: Study, todo, devices) -> devices_mod.Placement:
 
 def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log,
                 devices: int | None = None) -> tuple[int, dict]:
-    """Compile everything, then render, time, score and store each sequence of ``todo`` that
-    this process renders (``devices``: how many local devices; None: all); returns how many
-    it rendered and the compiled programs by ``program_key``."""
+    """Compile, then render, time, score and store each sequence of ``todo`` that this
+    process renders (``devices``: how many local devices; None: all), a batch of sequences at
+    a time where the process cannot hold every program at once (``program_batches``); returns
+    how many it rendered and the last batch's compiled programs by ``program_key``."""
     placement = _placement(study, todo, devices)
     todo = [t for t in todo if placement.device_of(group_of(t[0], t[2])) is not None]
     total = sum(p.frames for _, p, _ in todo)
     bar = tqdm(total=total, unit="frame", disable=not progress, dynamic_ncols=True)
+    compiled: dict = {}
+    render_s = 0.0
     try:
-        scenes, cams = {}, {}
-        for spec, path, _ in todo:
-            if spec.label not in scenes:
-                scenes[spec.label] = backend.load_scene(spec.source, dict(spec.params))
-            if (spec.label, path.name) not in cams:
-                cams[spec.label, path.name] = backend.make_cameras(
-                    scenes[spec.label], rendered_path(study, path), *study.resolution)
-        bar.set_description("compiling; references")
-        t0, before = time.perf_counter(), (compile_cache.counts(), executables.counts())
-        where = {g: placement.devices[d] for g, d in placement.group_device.items()}
-        compiled = compile_all(study, todo, scenes, cams,
-                               device_of=lambda spec, v: where[group_of(spec, v)])
-        on = (f" for {len(placement.devices)} device(s)" if len(placement.devices) > 1 else "")
-        log(f"compiled or loaded {len(compiled)} program(s){on} with {compile_workers()} "
-            f"worker(s) and rendered the references in {time.perf_counter() - t0:.1f} s"
-            f"{executables.describe(before[1])}{compile_cache.describe(before[0])}")
-        bar.reset(total=total)  # the rate and ETA are the rendering's, not the compiles'
-        t0 = time.perf_counter()
-        _render_placed(study, todo, st, env, out_dir, bar, compiled, scenes, cams, placement)
+        scenes, cams = _scenes_and_cameras(study, todo)
+        most = program_batches.programs_at_once()
+        parts = program_batches.batches(todo, partial(_programs_of, study, cams), most)
+        if len(parts) > 1:
+            log(f"the CPU backend holds at most {most} compiled programs at once: "
+                f"{len(parts)} batches of sequences, each compiled, rendered and freed in turn")
+        for i, part in enumerate(parts):
+            if i:
+                compiled = {}
+                program_batches.release_programs()
+            compiled = _compile_part(study, part, scenes, cams, placement, bar, log)
+            if i == 0:
+                bar.reset(total=total)  # the rate and ETA are the rendering's, not the compiles'
+            t0 = time.perf_counter()
+            _render_placed(study, part, st, env, out_dir, bar, compiled, scenes, cams, placement)
+            render_s += time.perf_counter() - t0
     finally:
         bar.close()
-    log(f"rendered, timed and scored {total} frame(s) in {time.perf_counter() - t0:.1f} s")
+    log(f"rendered, timed and scored {total} frame(s) in {render_s:.1f} s")
     return len(todo), compiled
+
+
+def _scenes_and_cameras(study: Study, todo) -> tuple[dict, dict]:
+    """Each scene of ``todo`` loaded once, and each (scene, path)'s rendered cameras."""
+    scenes, cams = {}, {}
+    for spec, path, _ in todo:
+        if spec.label not in scenes:
+            scenes[spec.label] = backend.load_scene(spec.source, dict(spec.params))
+        if (spec.label, path.name) not in cams:
+            cams[spec.label, path.name] = backend.make_cameras(
+                scenes[spec.label], rendered_path(study, path), *study.resolution)
+    return scenes, cams
+
+
+def _programs_of(study: Study, cams: dict, item) -> set:
+    """The identities of the programs a sequence runs: its sequence program, and its
+    single-frame program when the study times single frames."""
+    spec, path, v = item
+    n = len(cams[spec.label, path.name])
+    return {program_identity(spec, v, f) for f in ((n, 0) if study.timing.single_frame else (n,))}
+
+
+def _compile_part(study: Study, part, scenes, cams, placement, bar, log) -> dict:
+    """Every program of the sequences ``part`` (and their missing references), logged."""
+    bar.set_description("compiling; references")
+    t0, before = time.perf_counter(), (compile_cache.counts(), executables.counts())
+    where = {g: placement.devices[d] for g, d in placement.group_device.items()}
+    compiled = compile_all(study, part, scenes, cams,
+                           device_of=lambda spec, v: where[group_of(spec, v)])
+    on = (f" for {len(placement.devices)} device(s)" if len(placement.devices) > 1 else "")
+    log(f"compiled or loaded {len(compiled)} program(s){on} with {compile_workers()} "
+        f"worker(s) and rendered the references in {time.perf_counter() - t0:.1f} s"
+        f"{executables.describe(before[1])}{compile_cache.describe(before[0])}")
+    return compiled
 
 
 def _render_placed(study, todo, st, env, out_dir, bar, compiled, scenes, cams, placement):
