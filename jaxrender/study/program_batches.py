@@ -4,8 +4,8 @@ XLA:CPU maps a few memory regions for every kernel of a program it loads and unm
 when the executable is freed: about a thousand for one pipeline program (RESULTS.md, twelfth
 session). Linux caps a process's mappings at ``vm.max_map_count`` (65,530 by default), and
 when XLA's next mmap fails past it, the process segfaults inside the compiler. A study that
-compiled all its programs first (pipelines_overview: 162) could not run on the CPU. So on the
-CPU backend the runner compiles, renders and frees one batch of sequences at a time, each
+compiled all its programs first would pass that limit on the CPU from about 60 programs
+(pipelines_overview compiles 162). So on the CPU backend the runner compiles, renders and frees one batch of sequences at a time, each
 batch holding at most ``programs_at_once()`` programs; sequences that share a program stay in
 one batch. Elsewhere (a GPU's kernels live on the device) every sequence is one batch.
 """
