@@ -1,9 +1,7 @@
 """Strict numerics for every test (as Equinox does): implicit rank or dtype promotion is a bug."""
 
-import gc
 import os
 import zlib
-from pathlib import Path
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # Tests compile in threads (the fake scenes cannot be sent to worker processes); the process
@@ -21,6 +19,8 @@ if "xla_backend_optimization_level" not in os.environ.get("XLA_FLAGS", ""):
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+
+from jaxrender import memory_maps  # noqa: E402
 
 jax.config.update("jax_numpy_rank_promotion", "raise")
 jax.config.update("jax_numpy_dtype_promotion", "strict")
@@ -51,33 +51,14 @@ def _jax_cache_setting_restored():
         compilation_cache.reset_cache()
 
 
-def _mapped_regions() -> int:
-    with open("/proc/self/maps", "rb") as maps:
-        return sum(1 for _ in maps)
-
-
-def _map_limit() -> int | None:
-    try:
-        return int(Path("/proc/sys/vm/max_map_count").read_text())
-    except (OSError, ValueError):  # not Linux: no such limit to keep under
-        return None
-
-
-MAP_LIMIT = _map_limit()
-
-
 @pytest.fixture(autouse=True)
 def _compiled_programs_released():
-    # XLA:CPU maps a few memory regions for every kernel it loads (about a thousand for one
-    # pipeline program) and unmaps them only with the executable, which jax's caches keep for
-    # the life of the process. A worker that keeps the programs of a few hundred tests passes
-    # the kernel's vm.max_map_count, and the next compile segfaults inside XLA when its mmap
-    # fails (the CI crashes in test_exact and test_robust). Past half the limit, every cached
-    # program is dropped; the tests after it compile theirs again.
+    # A worker keeps the compiled programs of every test it ran in jax's caches, and XLA:CPU
+    # maps memory for each of their kernels: past the kernel's vm.max_map_count the next
+    # compile segfaults (the CI crashes in test_exact and test_robust). Past half the limit,
+    # the programs no test holds are dropped (jaxrender.memory_maps).
     yield
-    if MAP_LIMIT is not None and _mapped_regions() > MAP_LIMIT // 2:
-        jax.clear_caches()
-        gc.collect()
+    memory_maps.release_if_crowded()
 
 
 # The files that take longest on the 2-core CI machine (pytest --durations, 2026-12-03), handed

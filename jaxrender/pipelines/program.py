@@ -30,6 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxrender.pipelines.taa as taa
+from jaxrender import memory_maps
 from jaxrender.scene.animation import pose
 from jaxrender.scene.camera import Camera
 from jaxrender.shading.shadow import with_shadow_map
@@ -194,6 +195,8 @@ class Prepared:
 def _arguments(pipe, scene, cameras, cfg, sequence: bool, warmup_frames: int, start=0):
     """(static jit arguments, dynamic arguments, Prepared) of ``pipe``'s program; host-side
     preparation happens here. ``start``: the frame index (animation clock) of the first frame."""
+    if not _is_traced(scene, cameras):  # a compile may follow: room for its kernels
+        memory_maps.release_if_crowded()
     if sequence:
         cameras = stack_cameras(cameras)
     n = int(np.shape(cameras.eye)[0]) if sequence else 1

@@ -21,7 +21,7 @@ from pathlib import Path
 import jax
 from tqdm import tqdm
 
-from jaxrender import timing
+from jaxrender import memory_maps, timing
 from jaxrender.errors import StudyError
 from jaxrender.study import (backend, cache, compile_cache, executables, matching,
                              program_batches, store, summary, time_series)
@@ -158,7 +158,7 @@ def _render_all(study: Study, todo, st, env, out_dir: Path, progress: bool, log,
         for i, part in enumerate(parts):
             if i:
                 compiled = {}
-                program_batches.release_programs()
+                memory_maps.release()
             compiled = _compile_part(study, part, scenes, cams, placement, bar, log)
             if i == 0:
                 bar.reset(total=total)  # the rate and ETA are the rendering's, not the compiles'

@@ -4,6 +4,7 @@ rows of an unbatched one."""
 import json
 import math
 
+from jaxrender import memory_maps
 from jaxrender.study import program_batches
 from jaxrender.study.runner import run_study
 from jaxrender.study.schema import load_study
@@ -33,9 +34,9 @@ def test_a_group_larger_than_the_bound_is_a_batch_of_its_own():
 def test_programs_at_once_on_this_backend(monkeypatch, tmp_path):
     limit = tmp_path / "max_map_count"
     limit.write_text("65530\n")
-    monkeypatch.setattr(program_batches, "MAP_COUNT_FILE", limit)
+    monkeypatch.setattr(memory_maps, "MAP_COUNT_FILE", limit)
     assert program_batches.programs_at_once() == 65530 // 2 // program_batches.REGIONS_PER_PROGRAM
-    monkeypatch.setattr(program_batches, "MAP_COUNT_FILE", tmp_path / "missing")
+    monkeypatch.setattr(memory_maps, "MAP_COUNT_FILE", tmp_path / "missing")
     assert program_batches.programs_at_once() is None
 
 

@@ -1,0 +1,58 @@
+"""Compiled programs are freed once a process is past its share of the mapping limit."""
+
+import jax
+import jax.numpy as jnp
+import pytest
+
+from jaxrender import memory_maps
+
+pytestmark = pytest.mark.skipif(memory_maps.mapped_regions() is None,
+                                reason="no /proc/self/maps on this system")
+
+
+def _program(seed: int):
+    # Distinct programs of a few kernels each (a sort keeps them from fusing into one).
+    @jax.jit
+    def f(x):
+        return jnp.sort(jnp.sin(x) * seed + jnp.cumsum(x))[::2].sum() + jnp.max(x * x)
+
+    f(jnp.arange(64.0 + seed)).block_until_ready()
+    return f
+
+
+def _limit(monkeypatch, tmp_path, value: int):
+    path = tmp_path / "max_map_count"
+    path.write_text(f"{value}\n")
+    monkeypatch.setattr(memory_maps, "MAP_COUNT_FILE", path)
+
+
+def test_past_the_share_every_unheld_program_is_freed(monkeypatch, tmp_path):
+    memory_maps.release()
+    before = memory_maps.mapped_regions()
+    held = _program(1)
+    for seed in range(2, 40):
+        _program(seed)  # compiled, then dropped by the caller: jax's cache keeps it
+    grown = memory_maps.mapped_regions()
+    assert grown > before + 38, f"each program maps regions: {before} -> {grown}"
+    _limit(monkeypatch, tmp_path, 10 ** 7)
+    assert not memory_maps.release_if_crowded(now=True), "far under the limit: nothing to do"
+    assert memory_maps.mapped_regions() >= grown - 5
+    _limit(monkeypatch, tmp_path, grown)  # half of it is passed
+    assert memory_maps.release_if_crowded(now=True)
+    after = memory_maps.mapped_regions()
+    assert after < grown - 38, f"the dropped programs' regions are unmapped: {grown} -> {after}"
+    assert float(held(jnp.arange(65.0))) == pytest.approx(float(_program(1)(jnp.arange(65.0))))
+
+
+def test_counts_at_most_every_recount_interval(monkeypatch, tmp_path):
+    _limit(monkeypatch, tmp_path, 2)  # always crowded
+    assert memory_maps.release_if_crowded(now=True)
+    assert not memory_maps.release_if_crowded(), "counted just now: answered from that count"
+    monkeypatch.setattr(memory_maps, "RECOUNT_S", 0.0)
+    assert memory_maps.release_if_crowded()
+
+
+def test_no_limit_to_read_means_nothing_to_do(monkeypatch, tmp_path):
+    monkeypatch.setattr(memory_maps, "MAP_COUNT_FILE", tmp_path / "missing")
+    assert memory_maps.map_limit() is None
+    assert not memory_maps.release_if_crowded(now=True)
