@@ -12,6 +12,7 @@ compile again if asked for). A GPU's kernels live on the device: nothing to do t
 from __future__ import annotations
 
 import gc
+import threading
 import time
 from pathlib import Path
 
@@ -45,8 +46,9 @@ def mapped_regions() -> int | None:
 def release_if_crowded(fraction: float = 0.5, *, now: bool = False) -> bool:
     """On the CPU backend, past ``fraction`` of the mapping limit: drop jax's caches and
     collect, freeing every compiled program nothing else holds. Counts the regions at most
-    every RECOUNT_S seconds unless ``now``. Returns whether it released."""
-    if jax.default_backend() != "cpu":
+    every RECOUNT_S seconds unless ``now``. Only in the main thread: a study's loader thread
+    must not drop the caches under a trace in another. Returns whether it released."""
+    if jax.default_backend() != "cpu" or threading.current_thread() is not threading.main_thread():
         return False
     limit = map_limit()
     if limit is None:

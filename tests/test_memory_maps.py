@@ -56,3 +56,15 @@ def test_no_limit_to_read_means_nothing_to_do(monkeypatch, tmp_path):
     monkeypatch.setattr(memory_maps, "MAP_COUNT_FILE", tmp_path / "missing")
     assert memory_maps.map_limit() is None
     assert not memory_maps.release_if_crowded(now=True)
+
+
+def test_only_the_main_thread_releases(monkeypatch, tmp_path):
+    import threading
+
+    _limit(monkeypatch, tmp_path, 2)  # always crowded
+    seen = []
+    worker = threading.Thread(target=lambda: seen.append(memory_maps.release_if_crowded(now=True)))
+    worker.start()
+    worker.join()
+    assert seen == [False], "a study's loader thread leaves the caches alone"
+    assert memory_maps.release_if_crowded(now=True)
