@@ -33,14 +33,18 @@ def test_past_the_share_every_unheld_program_is_freed(monkeypatch, tmp_path):
     for seed in range(2, 40):
         _program(seed)  # compiled, then dropped by the caller: jax's cache keeps it
     grown = memory_maps.mapped_regions()
-    assert grown > before + 38, f"each program maps regions: {before} -> {grown}"
+    added = grown - before
+    # Other allocations map and unmap a few dozen regions as they like: compare with margins.
+    assert added > 76, f"39 programs of a few kernels each map regions: {before} -> {grown}"
     _limit(monkeypatch, tmp_path, 10 ** 7)
     assert not memory_maps.release_if_crowded(now=True), "far under the limit: nothing to do"
-    assert memory_maps.mapped_regions() >= grown - 5
+    assert held._cache_size() == 1, "nothing released: the compiled program is still cached"
     _limit(monkeypatch, tmp_path, grown)  # half of it is passed
     assert memory_maps.release_if_crowded(now=True)
+    assert held._cache_size() == 0, "released: jax's caches were dropped"
     after = memory_maps.mapped_regions()
-    assert after < grown - 38, f"the dropped programs' regions are unmapped: {grown} -> {after}"
+    assert after < grown - added // 2, f"the dropped programs' regions are unmapped: {before} " \
+        f"-> {grown} -> {after}"
     assert float(held(jnp.arange(65.0))) == pytest.approx(float(_program(1)(jnp.arange(65.0))))
 
 
