@@ -159,10 +159,11 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     cov_f = covered.reshape(-1)
     thr = jnp.asarray(threshold, jnp.float32)
     t = {k: jnp.asarray(v) for k, v in tab.items() if k != "sizes"}
-    # Chunked as a list of the largest level's size (65536 lanes at 1920x1080), not a
-    # sixteenth of it: with 4096-lane chunks DACS was bound by its 40-73 loop iterations (an
-    # H200 ran it 1.5-1.8x faster at 65536, idle lanes and all; benchmarks/RESULTS.md).
-    level_chunk = dispatch.resolve_chunk(chunk, n_max)
+    # Each level is one launch of the fewest power-of-two MIN_CHUNK-lane chunks that hold its
+    # list (dispatch's "switch"): a loop of such chunks paid a host round trip per chunk (40-73
+    # a frame), and a loop of the largest level's size (65536 lanes at 1920x1080) launched
+    # four times the lanes DACS shades; benchmarks/RESULTS.md, ninth and twelfth sessions.
+    level_chunk = int(chunk) if int(chunk) > 0 else min(dispatch.MIN_CHUNK, max(n_max, 1))
 
     def level_body(level, carry):
         img, needs, inv, lanes, chunks = carry
@@ -185,7 +186,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
         with jax.named_scope("shade"):
             listed = dispatch.WorkList.of(need)
             img, work = dispatch.run(dispatch.WorkList(pix[listed.items], listed.count),
-                                     shade_fn, img, level_chunk)
+                                     shade_fn, img, level_chunk, default_mode="switch")
         needs = needs.at[level].set(need)
         return (img, needs, inv + work.invocations, lanes + work.lanes, chunks + work.chunks)
 

@@ -93,9 +93,10 @@ LAUNCH_MODES = ("loop", "switch", "binary")
 ENV_LAUNCH = "JAXRENDER_DISPATCH"
 
 
-def launch_mode() -> str:
+def launch_mode(default: str = "loop") -> str:
     """How a work list's chunks are launched, read when a program is traced:
-    ``JAXRENDER_DISPATCH`` (loop, switch or binary), else "loop".
+    ``JAXRENDER_DISPATCH`` (loop, switch or binary), else ``default`` (the list's own: "loop"
+    for all but DACS's levels).
 
     - loop: one ``while`` iteration per chunk (on a GPU each iteration reads its condition back
       and launches the body's kernels again).
@@ -111,7 +112,7 @@ def launch_mode() -> str:
         if said not in LAUNCH_MODES:
             raise ValueError(f"{ENV_LAUNCH}={said!r}: expected one of {', '.join(LAUNCH_MODES)}")
         return said
-    return "loop"
+    return default
 
 
 def _launch(n_chunks: Array, max_chunks: int, chunk: int, launch, acc, mode: str):
@@ -144,17 +145,17 @@ def _chunks_of(count: Array, chunk: int) -> Array:
 
 
 def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
-        chunk: int) -> tuple[Array, WorkList]:
+        chunk: int, default_mode: str = "loop") -> tuple[Array, WorkList]:
     """For the live items of ``work``, write ``fn(items int32[L], live bool[L]) ->
     values[L, ...]`` into ``out[items]``, ``L`` lanes a launch (a multiple of ``chunk``).
 
-    Launches whole chunks covering the count (``launch_mode``); padding lanes are passed
-    live=False and their results are discarded. ``chunk`` 0 picks ``auto_chunk`` for the list.
-    Returns (out, the work list with its dispatch counts).
+    Launches whole chunks covering the count (``launch_mode(default_mode)``); padding lanes
+    are passed live=False and their results are discarded. ``chunk`` 0 picks ``auto_chunk``
+    for the list. Returns (out, the work list with its dispatch counts).
     """
     items, n = work.items, work.count
     chunk = int(min(resolve_chunk(chunk, items.shape[0]), max(items.shape[0], 1)))
-    mode = launch_mode()
+    mode = launch_mode(default_mode)
     max_chunks = max(-(-items.shape[0] // chunk), 1)
     # Zeros past the list for the lanes of the largest launch.
     span = chunk if mode == "loop" else chunk << max(max_chunks - 1, 0).bit_length()

@@ -160,6 +160,24 @@ def test_borders_and_odd_sizes_are_finite(w, h, spacing):
     assert img.min() >= image.min() and img.max() <= image.max()
 
 
+def test_each_level_is_one_launch_of_a_power_of_two_number_of_chunks():
+    # Levels need different numbers of 64-lane chunks here; each launches the fewest power of
+    # two of them that holds its list (dispatch's "switch"), read off its own decisions.
+    rng = np.random.default_rng(7)
+    image = rng.uniform(0.0, 1.0, (64, 96, 3)).astype(np.float32)
+    image[:, :40] = 0.5  # flat on the left: fewer of its pixels need shading
+    _, shaded, counts = _lookup(image, 0.002)
+    levels = level_map(64, 96, 4)
+    need = [int(np.sum(shaded & (levels == k))) for k in range(n_levels(4))]
+    chunks = [-(-n // 64) for n in need]
+    launched = [0 if c == 0 else 1 << (c - 1).bit_length() for c in chunks]
+    assert len(set(chunks)) > 2 and launched != chunks, f"the case rounds up: {chunks}"
+    assert int(counts["shade_invocations"]) == sum(need)
+    assert int(counts["dispatch_chunks"]) == sum(launched), (need, chunks, launched)
+    assert int(counts["dispatch_lanes"]) == 64 * sum(launched)
+    assert int(counts["dispatch_lanes"]) < 2 * 64 * sum(chunks)
+
+
 def test_warp_simulation_counts():
     w = 32
     all_on = [jnp.ones((256,), bool)]
