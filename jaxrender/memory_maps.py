@@ -23,7 +23,7 @@ MAPS_FILE = Path("/proc/self/maps")
 # Reading the maps costs the kernel about 3.5 us a region (0.1 s at 30,000), so a caller that
 # asks often is answered from its last count for this long.
 RECOUNT_S = 2.0
-_last = {"at": -RECOUNT_S, "regions": 0}
+_last_count = [-RECOUNT_S]  # when the regions were last counted (time.monotonic)
 
 
 def map_limit() -> int | None:
@@ -46,18 +46,19 @@ def mapped_regions() -> int | None:
 def release_if_crowded(fraction: float = 0.5, *, now: bool = False) -> bool:
     """On the CPU backend, past ``fraction`` of the mapping limit: drop jax's caches and
     collect, freeing every compiled program nothing else holds. Counts the regions at most
-    every RECOUNT_S seconds unless ``now``. Only in the main thread: a study's loader thread
-    must not drop the caches under a trace in another. Returns whether it released."""
+    every RECOUNT_S seconds (between counts it answers False at once) unless ``now``. Only in
+    the main thread: a study's loader thread must not drop the caches under a trace in
+    another. Returns whether it released."""
     if jax.default_backend() != "cpu" or threading.current_thread() is not threading.main_thread():
         return False
     limit = map_limit()
     if limit is None:
         return False
     t = time.monotonic()
-    if not now and t - _last["at"] < RECOUNT_S:
+    if not now and t - _last_count[0] < RECOUNT_S:
         return False
+    _last_count[0] = t
     regions = mapped_regions()
-    _last.update(at=t, regions=regions or 0)
     if regions is None or regions <= limit * fraction:
         return False
     release()

@@ -55,4 +55,3 @@ def batches(todo: list, programs_of, most: int | None) -> list[list]:
             held = set(progs)
     order = {id(item): i for i, item in enumerate(todo)}
     return [sorted(b, key=lambda item: order[id(item)]) for b in out]
-
