@@ -58,7 +58,7 @@ class DacsConfig(BlendingConfig):
     each warp searches per level. border: ``average`` or ``shade`` pixels that lack a complete
     opposite pair of parents inside the image (see the module docstring); when width - 1 and
     height - 1 are multiples of the spacing every pixel has such a pair, and a non-default
-    border is refused. chunk (see PipelineConfig; 0: 4096 lanes, each level one launch of the
+    border is refused. chunk (see PipelineConfig; 0: 4096 lanes; each level is one launch of the
     fewest power-of-two number of chunks that holds its list) is not output-neutral here: the
     counts ``dispatch_lanes`` (chunks x chunk launched) and ``dispatch_chunks`` are read off
     it."""
