@@ -27,15 +27,16 @@ def _limit(monkeypatch, tmp_path, value: int):
 
 
 def test_past_the_share_every_unheld_program_is_freed(monkeypatch, tmp_path):
+    _program(0)  # what the first compile of a process maps once
     memory_maps.release()
     before = memory_maps.mapped_regions()
     held = _program(1)
-    for seed in range(2, 40):
+    for seed in range(2, 80):
         _program(seed)  # compiled, then dropped by the caller: jax's cache keeps it
     grown = memory_maps.mapped_regions()
     added = grown - before
     # Other allocations map and unmap a few dozen regions as they like: compare with margins.
-    assert added > 76, f"39 programs of a few kernels each map regions: {before} -> {grown}"
+    assert added > 118, f"79 programs of a few kernels each map regions: {before} -> {grown}"
     _limit(monkeypatch, tmp_path, 10 ** 7)
     assert not memory_maps.release_if_crowded(now=True), "far under the limit: nothing to do"
     assert held._cache_size() == 1, "nothing released: the compiled program is still cached"
