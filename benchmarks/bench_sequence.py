@@ -53,9 +53,8 @@ def _time(fn, *args) -> float:
 
 def _checksum(frames) -> dict:
     """The sequence's image sum (float64 on the host) and total shading invocations."""
-    frame = frames[0] if isinstance(frames, tuple) else frames
-    counts = getattr(frame, "counts", {}) or {}
-    out = {"image_sum": float(np.asarray(frame.image, np.float64).sum())}
+    counts = frames.counts or {}
+    out = {"image_sum": float(np.asarray(frames.image, np.float64).sum())}
     if "shade_invocations" in counts:
         out["invocations"] = int(np.asarray(counts["shade_invocations"]).sum())
     return out

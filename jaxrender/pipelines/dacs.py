@@ -165,7 +165,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     # list (dispatch's "switch"): a loop of such chunks paid a host round trip per chunk (40-73
     # a frame), and a loop of the largest level's size (65536 lanes at 1920x1080) launched
     # four times the lanes DACS shades; benchmarks/RESULTS.md, ninth and twelfth sessions.
-    level_chunk = int(chunk) if int(chunk) > 0 else min(dispatch.MIN_CHUNK, max(n_max, 1))
+    level_chunk = int(chunk) if int(chunk) > 0 else dispatch.MIN_CHUNK  # run() caps it at the list
 
     def level_body(level, carry):
         img, needs, inv, lanes, chunks = carry
