@@ -14,6 +14,7 @@ from jaxrender.scene.scene import Scene
 import jaxrender.shading.brdf as brdf
 from jaxrender.shading.shadow import shadow_factor
 from jaxrender.shading.texture import sample
+from jaxrender.shading.fusion import materialize, materialize_all, sum_small
 from jaxrender.shading.vec import cross, dot, safe_normalize
 from jaxrender.types import Array, SurfacePoints
 
@@ -128,7 +129,7 @@ def _lights(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, alb
         es.append(ed)
     if lt.point_position.shape[0]:
         d = lt.point_position[None, :, :] - pos[:, None, :]  # [N, Lp, 3]
-        dist2 = jnp.maximum(jnp.sum(d * d, axis=-1, keepdims=True), 1e-12)
+        dist2 = jnp.maximum(dot(d, d), 1e-12)
         ls.append(d / jnp.sqrt(dist2))
         es.append(lt.point_intensity[None, :, :] / dist2)
     if not ls:
@@ -136,24 +137,24 @@ def _lights(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, alb
     l_dir = jnp.concatenate(ls, axis=1)  # [N, L, 3]
     e = jnp.concatenate(es, axis=1)
     n_l = n[:, None, :]
-    cos = jnp.sum(n_l * l_dir, axis=-1, keepdims=True)  # [N, L, 1]
-    above = jnp.sum(ng[:, None, :] * l_dir, axis=-1, keepdims=True) > 0.0
+    cos = dot(n_l, l_dir)  # [N, L, 1]
+    above = dot(ng[:, None, :], l_dir) > 0.0
     cos_c = jnp.where(above, jnp.maximum(cos, 0.0), 0.0)
     f = brdf.lambert(albedo)[:, None, :]
     if effects.specular:
         ks, shin, alpha_g = spec_params
         kind = _gather(scene.materials.brdf, mat)[:, None, None]
         h = safe_normalize(l_dir + v[:, None, :], n_l + 0.0 * l_dir)
-        n_h = jnp.sum(n_l * h, axis=-1, keepdims=True)
+        n_h = dot(n_l, h)
         if BLINN_PHONG in effects.brdfs:
             bp = brdf.blinn_phong(ks[:, None, :], shin[:, None, :], n_h)
             f = f + jnp.where(kind == BLINN_PHONG, bp, 0.0)
         if GGX in effects.brdfs:
-            n_v = jnp.sum(n * v, axis=-1, keepdims=True)[:, None, :]
-            v_h = jnp.sum(v[:, None, :] * h, axis=-1, keepdims=True)
+            n_v = dot(n, v)[:, None, :]
+            v_h = dot(v[:, None, :], h)
             g = brdf.ggx(ks[:, None, :], alpha_g[:, None, :], cos, n_v, n_h, v_h)
             f = f + jnp.where(kind == GGX, g, 0.0)
-    return jnp.sum(f * e * cos_c, axis=1)
+    return sum_small(f * e * cos_c, axis=1)
 
 
 @jax.named_scope("shade")
@@ -167,6 +168,9 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     m = scene.materials
     mat = points.material
     albedo, _ = _base_colour(points, scene, effects)
+    if effects.textures:
+        # Stored: every light's lobe reads it, and a fused read would filter the texture again.
+        albedo = materialize(albedo)
     n = points.shading_normal
     spec_params = None
     if effects.specular:
@@ -175,7 +179,7 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
         alpha_g = jnp.square(_gather(m.roughness, mat))[:, None]
         spec_params = (ks, shin, alpha_g)
     if effects.normal_map:
-        n, length = _normal_map(points, scene, effects)
+        n, length = materialize_all(*_normal_map(points, scene, effects))
         if effects.toksvig and effects.specular:
             spec_params = (ks, brdf.toksvig_shininess(shin, length),
                            brdf.toksvig_roughness(alpha_g, length))

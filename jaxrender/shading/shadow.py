@@ -11,6 +11,7 @@ import jax.numpy as jnp
 
 from jaxrender.raster.rasterize import rasterize_depth_clip
 from jaxrender.scene.scene import Scene, ShadowMap
+from jaxrender.shading.fusion import sum_small
 from jaxrender.shading.vec import cross, safe_normalize
 from jaxrender.types import Array
 
@@ -32,7 +33,7 @@ def light_frame(scene: Scene) -> tuple[Array, Array, Array]:
 
 def _light_space(points: Array, sm_origin, basis, half) -> Array:
     d = points - sm_origin[None, :]
-    return jnp.sum(d[:, None, :] * basis[None, :, :], axis=-1) / half[None, :]  # [N, 3] in [-1, 1]
+    return sum_small(d[:, None, :] * basis[None, :, :]) / half[None, :]  # [N, 3] in [-1, 1]
 
 
 @partial(jax.jit, static_argnames="size")

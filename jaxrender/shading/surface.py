@@ -7,13 +7,14 @@ import jax.numpy as jnp
 
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.scene import Scene
+from jaxrender.shading.fusion import all_small, materialize_all, sum_small
 from jaxrender.shading.vec import cross, dot, safe_normalize
 from jaxrender.types import Array, SurfacePoints
 
 
 def _interp(w: Array, attr: Array) -> Array:
     """w float32[N, 3], attr [N, 3, C] -> [N, C]."""
-    return jnp.sum(w[:, :, None] * attr, axis=1)
+    return sum_small(w[:, :, None] * attr, axis=1)
 
 
 @jax.named_scope("surface_points")
@@ -29,7 +30,7 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
     """
     tri_id = jnp.asarray(tri_id, jnp.int32)
     valid = (tri_id >= 0) & (tri_id < scene.faces.shape[0])
-    valid = valid & jnp.all(jnp.isfinite(bary), axis=-1)
+    valid = valid & all_small(jnp.isfinite(bary))
     vcol = valid[:, None]
     bary = jnp.where(vcol, bary, jnp.float32(1.0 / 3.0))
     dbary_dx = jnp.where(vcol & jnp.isfinite(dbary_dx), dbary_dx, 0.0)
@@ -47,6 +48,8 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
     flip = dot(n_geo, view) < 0.0
     sign = jnp.where(flip, jnp.float32(-1.0), jnp.float32(1.0))
     n_geo, n_shade = n_geo * sign, n_shade * sign
+    # Stored: the shader reads these per light and per component, through further normalisations.
+    pos, n_geo, n_shade, view = materialize_all(pos, n_geo, n_shade, view)
     tan_v = scene.tangents[f]
     tangent = jnp.concatenate([_interp(bary, tan_v[:, :, :3]), tan_v[:, 0, 3:4]], axis=-1)
     uv_v = scene.uvs[f]

@@ -7,14 +7,15 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.scene.textures import Textures
+from jaxrender.shading.fusion import sum_small
 from jaxrender.types import Array
 
 
 def footprint(duv_dx: Array, duv_dy: Array, resolution: int) -> tuple[Array, Array]:
     """Lengths in level-0 texels of the pixel's footprint axes: (|duv/dx| R, |duv/dy| R), [N]."""
     r = jnp.float32(resolution)
-    lx = jnp.sqrt(jnp.sum(jnp.square(duv_dx * r), axis=-1))
-    ly = jnp.sqrt(jnp.sum(jnp.square(duv_dy * r), axis=-1))
+    lx = jnp.sqrt(sum_small(jnp.square(duv_dx * r)))
+    ly = jnp.sqrt(sum_small(jnp.square(duv_dy * r)))
     return lx, ly
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from jaxrender.shading.fusion import sum_small
 from jaxrender.types import Array
 
 TINY = 1e-30
@@ -11,7 +12,7 @@ TINY = 1e-30
 
 def dot(a: Array, b: Array) -> Array:
     """Dot product over the last axis, keeping it: [..., 3] x [..., 3] -> [..., 1]."""
-    return jnp.sum(a * b, axis=-1, keepdims=True)
+    return sum_small(a * b, axis=-1, keepdims=True)
 
 
 def safe_normalize(v: Array, fallback: Array) -> Array:

@@ -1,0 +1,53 @@
+"""Where the shader's kernels begin and end on XLA.
+
+XLA ends a fused kernel at every reduce, and it copies an elementwise producer into each
+consumer that fuses it. A shader written with reduces over size-3 axes (dot products,
+interpolation over a triangle's corners) therefore runs as dozens of kernels, each storing its
+[N, 3] results; written as adds, its stages fuse, but a value read by several consumers is
+computed again in each, and through a chain of normalisations that costs exponentially in the
+chain's depth. The shader uses both tools below: adds inside a stage, and an explicit store
+between stages (the surface point, the mapped normal, the textured albedo).
+"""
+
+from __future__ import annotations
+
+import functools
+import operator
+
+import jax.numpy as jnp
+from jax import lax
+
+from jaxrender.types import Array
+
+
+def sum_small(x: Array, axis: int = -1, keepdims: bool = False) -> Array:
+    """``jnp.sum`` over a short static axis (3 components, 3 corners, a few lights), as adds."""
+    axis = axis % x.ndim
+    parts = [lax.index_in_dim(x, i, axis, keepdims=keepdims) for i in range(x.shape[axis])]
+    return functools.reduce(operator.add, parts)
+
+
+def all_small(x: Array, axis: int = -1) -> Array:
+    """``jnp.all`` over a short static axis, as ands."""
+    axis = axis % x.ndim
+    parts = [lax.index_in_dim(x, i, axis, keepdims=False) for i in range(x.shape[axis])]
+    return functools.reduce(operator.and_, parts)
+
+
+def materialize(x: Array) -> Array:
+    """``x``, stored once: its consumers read it instead of each fusing its computation.
+
+    ``lax.optimization_barrier`` cannot do this (XLA removes it before fusion). A scatter is
+    never fused into its consumers, and a scatter onto distinct rows in order is a copy."""
+    rows = jnp.arange(x.shape[0], dtype=jnp.int32)
+    return jnp.zeros_like(x).at[rows].set(x, unique_indices=True, indices_are_sorted=True)
+
+
+def materialize_all(*arrays: Array) -> tuple[Array, ...]:
+    """``materialize`` of float arrays with the same leading axis, in one store."""
+    n = arrays[0].shape[0]
+    flat = [a.reshape(n, -1) for a in arrays]
+    joined = materialize(jnp.concatenate(flat, axis=1))
+    widths = [f.shape[1] for f in flat]
+    starts = [sum(widths[:i]) for i in range(len(widths))]
+    return tuple(joined[:, s:s + w].reshape(a.shape) for a, s, w in zip(arrays, starts, widths))

@@ -1,0 +1,101 @@
+"""The shader's kernel boundaries (jaxrender.shading.fusion): the add-written reductions equal
+jnp's, the stores return their input bit for bit and survive XLA's optimisation, and the shared
+shader reduces over no short axis."""
+
+import re
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from shading_helpers import RES
+
+from jaxrender.shading import load_lit_scene, shade
+from jaxrender.shading.fusion import all_small, materialize, materialize_all, sum_small
+from jaxrender.shading.vec import safe_normalize
+from jaxrender.types import SurfacePoints
+
+SHORT = 4  # the longest axis the shader may reduce as adds; a reduce over one is a regression
+
+
+@pytest.mark.parametrize("shape,axis", [((7, 3), -1), ((5, 3, 4), 1), ((6, 2, 3), -1), ((3, 9), 0)])
+def test_sum_small_and_all_small_equal_jnp(shape, axis):
+    rng = np.random.default_rng(sum(shape))
+    x = rng.normal(size=shape).astype(np.float32)
+    for keep in (False, True):
+        np.testing.assert_allclose(jax.jit(lambda a: sum_small(a, axis, keep))(x),
+                                   np.sum(x, axis=axis, keepdims=keep), rtol=1e-6, atol=1e-6,
+                                   err_msg=f"sum_small over axis {axis} of {shape}, keepdims {keep}")
+    b = x > -0.5
+    np.testing.assert_array_equal(jax.jit(lambda a: all_small(a, axis))(b), np.all(b, axis=axis),
+                                  err_msg=f"all_small over axis {axis} of {shape}")
+
+
+def test_materialize_returns_its_input_bit_for_bit():
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(11, 3)).astype(np.float32)
+    b = rng.normal(size=(11,)).astype(np.float32)
+    c = rng.normal(size=(11, 2, 2)).astype(np.float32)
+    c[4, 1, 0] = np.nan
+    np.testing.assert_array_equal(jax.jit(materialize)(a), a, err_msg="materialize")
+    for got, want, name in zip(jax.jit(materialize_all)(a, b, c), (a, b, c), "abc"):
+        np.testing.assert_array_equal(got, want, err_msg=f"materialize_all, array {name}")
+    batched = jax.vmap(materialize)(np.stack([a, 2 * a]))
+    np.testing.assert_array_equal(batched, np.stack([a, 2 * a]), err_msg="materialize under vmap")
+
+
+def _chain(x, store):
+    for i in range(6):
+        x = safe_normalize(x + 0.25 * i, x)
+        x = materialize(x) if store else x
+    return x
+
+
+def test_materialize_survives_optimisation_and_keeps_the_result():
+    x = jnp.asarray(np.random.default_rng(5).normal(size=(64, 3)).astype(np.float32))
+    stored = jax.jit(lambda a: _chain(a, True))
+    text = stored.lower(x).compile().as_text()
+    assert len(re.findall(r"\bscatter\(", text)) >= 6, \
+        "XLA removed the stores: the compiled chain has fewer than its 6 scatters"
+    np.testing.assert_allclose(stored(x), jax.jit(lambda a: _chain(a, False))(x), rtol=1e-6,
+                               atol=1e-7, err_msg="the stored chain computes another value")
+
+
+def _short_reductions(jaxpr, found):
+    for eqn in jaxpr.eqns:
+        if eqn.primitive.name in ("reduce_sum", "reduce_and", "reduce_or", "reduce_max"):
+            shape = eqn.invars[0].aval.shape
+            axes = eqn.params["axes"]
+            if any(shape[a] <= SHORT for a in axes):
+                found.append((eqn.primitive.name, shape, axes))
+        for sub in _sub_jaxprs(eqn.params):
+            _short_reductions(sub, found)
+    return found
+
+
+def _sub_jaxprs(params):
+    for value in params.values():
+        for v in value if isinstance(value, (tuple, list)) else (value,):
+            inner = getattr(v, "jaxpr", v)
+            if hasattr(inner, "eqns"):
+                yield inner
+
+
+def test_the_shader_reduces_over_no_short_axis():
+    """Every effect of the room (textures, normal map, both BRDFs, shadows, three lights): a
+    reduce over a size-3 axis would cut the shader into a kernel there."""
+    scene = load_lit_scene("room", effects={"shadow_map_size": RES})
+    n = 16
+    rng = np.random.default_rng(9)
+    unit = lambda k: (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(  # noqa: E731
+        rng.normal(size=(n, k)).astype(np.float32))
+    pts = SurfacePoints(
+        position=jnp.asarray(rng.normal(size=(n, 3)), jnp.float32), normal=unit(3),
+        shading_normal=unit(3), tangent=jnp.concatenate([unit(3), jnp.ones((n, 1))], 1),
+        uv=jnp.asarray(rng.random((n, 2)), jnp.float32),
+        duv_dx=jnp.full((n, 2), 1e-3), duv_dy=jnp.full((n, 2), 1e-3), view=unit(3),
+        material=jnp.asarray(rng.integers(0, 5, n), jnp.int32),
+        tri_id=jnp.zeros((n,), jnp.int32), valid=jnp.ones((n,), bool))
+    closed = jax.make_jaxpr(lambda p: shade(p, scene))(pts)
+    found = _short_reductions(closed.jaxpr, [])
+    assert not found, f"shade() reduces over short axes: {found}"
