@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "jaxrender"
 # of lower rank. Plain helpers that know nothing of rendering sit at the bottom.
 LAYERS = {
     "types": 0, "compaction": 0, "sorting": 0, "spawning": 0, "parallel": 0, "version": 0,
-    "errors": 0, "catalog": 0, "parsing": 0, "memory_maps": 0,
+    "errors": 0, "catalog": 0, "parsing": 0, "memory_maps": 0, "fusion": 0,
     "scene": 1,
     "raster": 2,
     "shading": 3,

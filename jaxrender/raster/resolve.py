@@ -13,6 +13,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxrender.fusion import all_small, max_small, sum_small
 from jaxrender.raster.work_items import EMPTY_KEY
 from jaxrender.types import Array, VisBuffer
 
@@ -125,21 +126,21 @@ def pair_barycentrics(clip: Array, faces: Array, tri: Array, px: Array, py: Arra
     c = jnp.stack([verts[..., 0], verts[..., 1], verts[..., 3]], axis=-1)  # [N, 3, 3]
     rows = jnp.stack([jnp.cross(c[:, 1], c[:, 2]), jnp.cross(c[:, 2], c[:, 0]),
                       jnp.cross(c[:, 0], c[:, 1])], axis=-2)
-    scale = jnp.max(jnp.abs(rows), axis=(-2, -1), keepdims=True)
+    scale = max_small(jnp.abs(rows), (-2, -1))
     rows = rows / jnp.where(scale > 0, scale, 1.0)
     u = (px.astype(jnp.float32) + offset[0]) * (2.0 / width) - 1.0
     v = 1.0 - (py.astype(jnp.float32) + offset[1]) * (2.0 / height)
     e = rows[..., 0] * u[:, None] + rows[..., 1] * v[:, None] + rows[..., 2]
-    s = jnp.sum(e, axis=-1, keepdims=True)
+    s = sum_small(e, keepdims=True)
     ok = (tri >= 0)[:, None] & (s != 0.0)
     s = jnp.where(ok, s, 1.0)
     b = e / s
-    db_du = (rows[..., 0] - b * jnp.sum(rows[..., 0], axis=-1, keepdims=True)) / s
-    db_dv = (rows[..., 1] - b * jnp.sum(rows[..., 1], axis=-1, keepdims=True)) / s
-    inside = jnp.all(b >= 0.0, axis=-1, keepdims=True)
+    db_du = (rows[..., 0] - b * sum_small(rows[..., 0], keepdims=True)) / s
+    db_dv = (rows[..., 1] - b * sum_small(rows[..., 1], keepdims=True)) / s
+    inside = all_small(b >= 0.0)[:, None]
     # Inside the triangle clamp a rounding error away, as resolve does; outside extrapolate.
     bc = jnp.clip(b, 0.0, 1.0)
-    bc = bc / jnp.maximum(jnp.sum(bc, axis=-1, keepdims=True), 1e-30)
+    bc = bc / jnp.maximum(sum_small(bc, keepdims=True), 1e-30)
     b = jnp.where(inside, bc, b)
     zero = jnp.zeros_like(b)
     third = jnp.full_like(b, 1.0 / 3.0)

@@ -14,7 +14,7 @@ from jaxrender.scene.scene import Scene
 import jaxrender.shading.brdf as brdf
 from jaxrender.shading.shadow import shadow_factor
 from jaxrender.shading.texture import sample
-from jaxrender.shading.fusion import materialize, materialize_all, sum_small
+from jaxrender.fusion import materialize, materialize_all, sum_small
 from jaxrender.shading.vec import cross, dot, safe_normalize
 from jaxrender.types import Array, SurfacePoints
 

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 
 from jaxrender.raster.rasterize import rasterize_depth_clip
 from jaxrender.scene.scene import Scene, ShadowMap
-from jaxrender.shading.fusion import sum_small
+from jaxrender.fusion import sum_small
 from jaxrender.shading.vec import cross, safe_normalize
 from jaxrender.types import Array
 

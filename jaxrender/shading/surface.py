@@ -7,7 +7,7 @@ import jax.numpy as jnp
 
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.scene import Scene
-from jaxrender.shading.fusion import all_small, materialize_all, sum_small
+from jaxrender.fusion import all_small, materialize_all, sum_small
 from jaxrender.shading.vec import cross, dot, safe_normalize
 from jaxrender.types import Array, SurfacePoints
 

@@ -7,7 +7,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.scene.textures import Textures
-from jaxrender.shading.fusion import sum_small
+from jaxrender.fusion import sum_small
 from jaxrender.types import Array
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxrender.shading.fusion import sum_small
+from jaxrender.fusion import sum_small
 from jaxrender.types import Array
 
 TINY = 1e-30

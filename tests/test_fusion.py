@@ -1,4 +1,4 @@
-"""The shader's kernel boundaries (jaxrender.shading.fusion): the add-written reductions equal
+"""Kernel boundaries on XLA (jaxrender.fusion): the add-written reductions equal
 jnp's, the stores return their input bit for bit and survive XLA's optimisation, and the shared
 shader reduces over no short axis."""
 
@@ -8,14 +8,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from shading_helpers import RES
 
 from jaxrender.shading import load_lit_scene, shade
-from jaxrender.shading.fusion import all_small, materialize, materialize_all, sum_small
+from jaxrender.fusion import all_small, materialize, materialize_all, max_small, sum_small
+from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.shading.vec import safe_normalize
 from jaxrender.types import SurfacePoints
 
 SHORT = 4  # the longest axis the shader may reduce as adds; a reduce over one is a regression
+SHADOW_MAP = 32
 
 
 @pytest.mark.parametrize("shape,axis", [((7, 3), -1), ((5, 3, 4), 1), ((6, 2, 3), -1), ((3, 9), 0)])
@@ -29,6 +30,9 @@ def test_sum_small_and_all_small_equal_jnp(shape, axis):
     b = x > -0.5
     np.testing.assert_array_equal(jax.jit(lambda a: all_small(a, axis))(b), np.all(b, axis=axis),
                                   err_msg=f"all_small over axis {axis} of {shape}")
+    np.testing.assert_array_equal(jax.jit(lambda a: max_small(a, (axis,)))(x),
+                                  np.max(x, axis=axis, keepdims=True),
+                                  err_msg=f"max_small over axis {axis} of {shape}")
 
 
 def test_materialize_returns_its_input_bit_for_bit():
@@ -84,7 +88,7 @@ def _sub_jaxprs(params):
 def test_the_shader_reduces_over_no_short_axis():
     """Every effect of the room (textures, normal map, both BRDFs, shadows, three lights): a
     reduce over a size-3 axis would cut the shader into a kernel there."""
-    scene = load_lit_scene("room", effects={"shadow_map_size": RES})
+    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
     n = 16
     rng = np.random.default_rng(9)
     unit = lambda k: (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(  # noqa: E731
@@ -99,3 +103,16 @@ def test_the_shader_reduces_over_no_short_axis():
     closed = jax.make_jaxpr(lambda p: shade(p, scene))(pts)
     found = _short_reductions(closed.jaxpr, [])
     assert not found, f"shade() reduces over short axes: {found}"
+
+
+def test_pair_barycentrics_reduce_over_no_short_axis():
+    """Forward's fragments and transparent layers feed the shader through these: a reduce here
+    would cut their shading launch into kernels again."""
+    rng = np.random.default_rng(11)
+    clip = jnp.asarray(np.concatenate([rng.normal(size=(6, 3)), np.ones((6, 1))], 1), jnp.float32)
+    faces = jnp.asarray([[0, 1, 2], [3, 4, 5]], jnp.int32)
+    tri = jnp.asarray([0, 1, -1, 0], jnp.int32)
+    px = py = jnp.asarray([3, 1, 0, 7], jnp.int32)
+    closed = jax.make_jaxpr(lambda c: pair_barycentrics(c, faces, tri, px, py, 16, 16))(clip)
+    found = _short_reductions(closed.jaxpr, [])
+    assert not found, f"pair_barycentrics reduces over short axes: {found}"

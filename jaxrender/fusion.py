@@ -1,4 +1,5 @@
-"""Where the shader's kernels begin and end on XLA.
+"""Where fused kernels begin and end on XLA, for the per-point arithmetic of the shader and
+of the barycentrics that feed it.
 
 XLA ends a fused kernel at every reduce, and it copies an elementwise producer into each
 consumer that fuses it. A shader written with reduces over size-3 axes (dot products,
@@ -25,6 +26,15 @@ def sum_small(x: Array, axis: int = -1, keepdims: bool = False) -> Array:
     axis = axis % x.ndim
     parts = [lax.index_in_dim(x, i, axis, keepdims=keepdims) for i in range(x.shape[axis])]
     return functools.reduce(operator.add, parts)
+
+
+def max_small(x: Array, axes: tuple[int, ...]) -> Array:
+    """``jnp.max`` over short static axes, keeping them, as maxima (exact in any order)."""
+    for axis in axes:
+        axis = axis % x.ndim
+        parts = [lax.index_in_dim(x, i, axis, keepdims=True) for i in range(x.shape[axis])]
+        x = functools.reduce(jnp.maximum, parts)
+    return x
 
 
 def all_small(x: Array, axis: int = -1) -> Array:
