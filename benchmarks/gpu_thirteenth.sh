@@ -1,34 +1,39 @@
 #!/usr/bin/env bash
 # Thirteenth session's plan (no machine was lent that session): the shader with its short
-# reductions written as adds and stores between its stages (jaxrender/shading/fusion.py),
-# against the tree before it, side by side in one device call.
+# reductions written as adds and stores between its stages (jaxrender/fusion.py), against the
+# tree before it and against variants, side by side in one device call.
 #   prepare: mkdir -p .v/v0 && git archive 9a6cd99 jaxrender | tar -x -C .v/v0
-#            (any other .v/<name>/jaxrender is timed too, in the shader part)
-#   device run (carry .whl, .v): bash benchmarks/gpu_thirteenth.sh shader sequence
-# shader: bench_shader.py (one screen of surface_points + shade, kernels and launches) per tree.
-# sequence: per-frame ms inside a 16-frame pan, with --checksum (equal image sums and counts
-# say both trees rendered the same frames); the 64-sample reference inside a 2-frame pan.
+#            other trees: .v/<name>/jaxrender (a copy of jaxrender/, edited)
+#   device runs (carry .whl, .v):
+#     bash benchmarks/gpu_thirteenth.sh shader sequence
+#     TREES="after os_adds" PIPELINES="object_space tads" bash benchmarks/gpu_thirteenth.sh sequence
+# shader: bench_shader.py (one screen of surface_points + shade: kernels, launches) for this
+#   checkout ("after") and every tree under .v/.
+# sequence: per-frame ms inside a 16-frame pan with --checksum (equal image sums and counts say
+#   the trees rendered the same frames) for each of TREES (default "after v0"); with the default
+#   PIPELINES, the 64-sample reference inside a 2-frame pan too.
 . "$(dirname "$0")/gpu_env.sh"
-trees() { echo "after:$PWD"; for d in .v/*/; do echo "$(basename "$d"):$PWD/$d"; done; }
+root_of() { if [ "$1" = after ]; then echo "$PWD"; else echo "$PWD/.v/$1"; fi; }
+tag() { sed "s/^{/{\"tree\": \"$1\", /"; }
 for part in "$@"; do
-  for t in $(trees); do
-    label=${t%%:*}; root=${t#*:}
-    export PYTHONPATH=$root:/tmp/site
-    if [ "$part" = shader ]; then
-      timeout -k 5 150 python3 benchmarks/bench_shader.py --label "$label" --top 6 \
-        --scenes ${SCENES:-room foliage stripes spheres terrain thin glass} 2>&1 | quiet \
-        >> "$OUT/shader.md"
-    elif [ "$part" = sequence ]; then
-      [ "$label" = after ] || [ "$label" = v0 ] || continue
-      S="python3 benchmarks/bench_sequence.py --no-single --checksum"
-      timeout -k 5 200 $S --frames 16 --rounds 5 --scenes room foliage spheres thin \
-        --pipelines forward deferred dacs visbuffer 2>&1 | quiet | grep '^{' \
-        | sed "s/^{/{\"tree\": \"$label\", /" | tee -a "$OUT/sequence.jsonl"
-      timeout -k 5 120 $S --frames 2 --rounds 3 --scenes room foliage \
-        --pipelines reference 2>&1 | quiet | grep '^{' \
-        | sed "s/^{/{\"tree\": \"$label\", /" | tee -a "$OUT/sequence.jsonl"
-    fi
-  done
+  if [ "$part" = shader ]; then
+    for t in after $(ls .v); do
+      PYTHONPATH=$(root_of "$t"):/tmp/site timeout -k 5 150 python3 benchmarks/bench_shader.py \
+        --label "$t" --top 6 --resolution ${RES:-1920x1080} --scenes ${SCENES:-room foliage stripes spheres terrain thin glass} \
+        2>&1 | quiet >> "$OUT/shader.md"
+    done
+    grep RESULT "$OUT/shader.md"
+  elif [ "$part" = sequence ]; then
+    for t in ${TREES:-after v0}; do
+      export PYTHONPATH=$(root_of "$t"):/tmp/site
+      S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution ${RES:-1920x1080}"
+      timeout -k 5 200 $S --frames 16 --rounds 5 --scenes ${SEQ_SCENES:-room foliage spheres thin} \
+        --pipelines ${PIPELINES:-forward deferred dacs visbuffer} 2>&1 | quiet | grep '^{' \
+        | tag "$t" | tee -a "$OUT/sequence.jsonl"
+      [ -n "${PIPELINES:-}" ] && continue
+      timeout -k 5 120 $S --frames 2 --rounds 3 --scenes room foliage --pipelines reference \
+        2>&1 | quiet | grep '^{' | tag "$t" | tee -a "$OUT/sequence.jsonl"
+    done
+  fi
 done
-[ -f "$OUT/shader.md" ] && grep RESULT "$OUT/shader.md"
 exit 0
