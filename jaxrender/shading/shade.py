@@ -9,12 +9,12 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxrender.fusion import materialize, materialize_all, sum_small
 from jaxrender.scene.effects import BLINN_PHONG, GGX, PROC_STRIPES, Effects
 from jaxrender.scene.scene import Scene
 import jaxrender.shading.brdf as brdf
 from jaxrender.shading.shadow import shadow_factor
 from jaxrender.shading.texture import sample
-from jaxrender.fusion import materialize, materialize_all, sum_small
 from jaxrender.shading.vec import cross, dot, safe_normalize
 from jaxrender.types import Array, SurfacePoints
 

@@ -9,9 +9,9 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 
+from jaxrender.fusion import sum_small
 from jaxrender.raster.rasterize import rasterize_depth_clip
 from jaxrender.scene.scene import Scene, ShadowMap
-from jaxrender.fusion import sum_small
 from jaxrender.shading.vec import cross, safe_normalize
 from jaxrender.types import Array
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxrender.fusion import all_small, materialize_all, sum_small
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.scene import Scene
-from jaxrender.fusion import all_small, materialize_all, sum_small
 from jaxrender.shading.vec import cross, dot, safe_normalize
 from jaxrender.types import Array, SurfacePoints
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.scene.textures import Textures
 from jaxrender.fusion import sum_small
+from jaxrender.scene.textures import Textures
 from jaxrender.types import Array
 
 
