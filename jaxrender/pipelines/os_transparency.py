@@ -23,7 +23,7 @@ from jaxrender.pipelines.transparency import (Layers, check_settings, composite,
                                               settings_of, transparent_fragments)
 from jaxrender.pipelines.visibility import clip_vertices, is_transparent
 from jaxrender.raster.resolve import pair_barycentrics
-from jaxrender.shading import opacity, surface_points
+from jaxrender.shading import opacity, surface_points, view_depth
 from jaxrender.types import Array
 
 
@@ -72,7 +72,7 @@ def blend_layers(scene, camera, blended: Blended | None, rows: Array, image: Arr
         pts = surface_points(scene, camera, jnp.where(blended.front, fr.tri, -1), blended.bary,
                              blended.ddx, blended.ddy)
         a = jnp.where(blended.front, opacity(pts, scene), 0.0)
-        z = jnp.sum((pts.position - camera.eye[None, :]) * camera.forward[None, :], axis=-1)
+        z = view_depth(pts, camera)
         values = jnp.concatenate([rows[w * h:], a[:, None], z[:, None]], axis=-1)
         layers = Layers(fr.pixel, fr.tri, fr.depth, blended.front, values,
                         jnp.minimum(fr.count, fr.pixel.shape[0]))

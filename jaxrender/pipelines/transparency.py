@@ -45,7 +45,7 @@ from jaxrender.raster.rasterize import default_clip_capacity, default_work_capac
 from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
-from jaxrender.shading import opacity, shade, surface_points
+from jaxrender.shading import opacity, shade, surface_points, view_depth
 from jaxrender.sorting import lex_sort, lex_sort_prefix
 from jaxrender.types import Array
 
@@ -93,7 +93,7 @@ def layer_shader(scene, camera):
     def fn(points):
         rgb = shade(points, scene)
         a = opacity(points, scene)
-        z = jnp.sum((points.position - camera.eye[None, :]) * camera.forward[None, :], axis=-1)
+        z = view_depth(points, camera)
         return jnp.concatenate([rgb, a[:, None], z[:, None]], axis=-1)
 
     return fn

@@ -66,3 +66,8 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
         tri_id=jnp.where(valid, tri_id, -1),
         valid=valid,
     )
+
+
+def view_depth(points: SurfacePoints, camera: Camera) -> Array:
+    """float32[N]: each point's distance in front of the camera, along its forward axis."""
+    return dot(points.position - camera.eye[None, :], camera.forward[None, :])[:, 0]
