@@ -7,8 +7,13 @@
 #   device runs (carry .whl, .v):
 #     bash benchmarks/gpu_thirteenth.sh shader sequence
 #     TREES="after os_adds" PIPELINES="object_space tads" bash benchmarks/gpu_thirteenth.sh sequence
+#     TREES="after dacs_adds" PIPELINES=dacs SEQ_SCENES="foliage room thin stripes" \
+#       bash benchmarks/gpu_thirteenth.sh sequence
+# The trees of that session: v0 = 9a6cd99 (before); v1 = this shader without its stores;
+# v5 = without the surface point's store; os_adds, dacs_adds = object space's footprint and
+# DACS's per-level decision and interpolation with their short sums as adds (jaxrender/fusion).
 # shader: bench_shader.py (one screen of surface_points + shade: kernels, launches) for this
-#   checkout ("after") and every tree under .v/.
+#   checkout ("after") and each of SHADER_TREES (default "v0 v1 v5").
 # sequence: per-frame ms inside a 16-frame pan with --checksum (equal image sums and counts say
 #   the trees rendered the same frames) for each of TREES (default "after v0"); with the default
 #   PIPELINES, the 64-sample reference inside a 2-frame pan too.
@@ -17,7 +22,7 @@ root_of() { if [ "$1" = after ]; then echo "$PWD"; else echo "$PWD/.v/$1"; fi; }
 tag() { sed "s/^{/{\"tree\": \"$1\", /"; }
 for part in "$@"; do
   if [ "$part" = shader ]; then
-    for t in after $(ls .v); do
+    for t in after ${SHADER_TREES:-v0 v1 v5}; do
       PYTHONPATH=$(root_of "$t"):/tmp/site timeout -k 5 150 python3 benchmarks/bench_shader.py \
         --label "$t" --top 6 --resolution ${RES:-1920x1080} --scenes ${SCENES:-room foliage stripes spheres terrain thin glass} \
         2>&1 | quiet >> "$OUT/shader.md"
