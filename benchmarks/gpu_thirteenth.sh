@@ -2,8 +2,7 @@
 # Thirteenth session's plan (no machine was lent that session): the shader with its short
 # reductions written as adds and stores between its stages (jaxrender/fusion.py), against the
 # tree before it and against variants, side by side in one device call.
-#   prepare: mkdir -p .v/v0 && git archive 9a6cd99 jaxrender | tar -x -C .v/v0
-#            other trees: .v/<name>/jaxrender (a copy of jaxrender/, edited)
+#   prepare: bash benchmarks/variants/prepare.sh (.v/v0 = 9a6cd99, .v/<name> = HEAD + <name>.patch)
 #   device runs (carry .whl, .v):
 #     bash benchmarks/gpu_thirteenth.sh shader sequence
 #     TREES="after os_adds" PIPELINES="object_space tads" bash benchmarks/gpu_thirteenth.sh sequence
