@@ -9,9 +9,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrender.shading import load_lit_scene, shade
 from jaxrender.fusion import all_small, materialize, materialize_all, max_small, sum_small
 from jaxrender.raster.resolve import pair_barycentrics
+from jaxrender.shading import load_lit_scene, shade
 from jaxrender.shading.vec import safe_normalize
 from jaxrender.types import SurfacePoints
 
@@ -24,7 +24,7 @@ def test_sum_small_and_all_small_equal_jnp(shape, axis):
     rng = np.random.default_rng(sum(shape))
     x = rng.normal(size=shape).astype(np.float32)
     for keep in (False, True):
-        np.testing.assert_allclose(jax.jit(lambda a: sum_small(a, axis, keep))(x),
+        np.testing.assert_allclose(jax.jit(lambda a, k=keep: sum_small(a, axis, k))(x),
                                    np.sum(x, axis=axis, keepdims=keep), rtol=1e-6, atol=1e-6,
                                    err_msg=f"sum_small over axis {axis} of {shape}, keepdims {keep}")
     b = x > -0.5
@@ -91,8 +91,11 @@ def test_the_shader_reduces_over_no_short_axis():
     scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
     n = 16
     rng = np.random.default_rng(9)
-    unit = lambda k: (lambda v: v / np.linalg.norm(v, axis=1, keepdims=True))(  # noqa: E731
-        rng.normal(size=(n, k)).astype(np.float32))
+
+    def unit(k):
+        v = rng.normal(size=(n, k)).astype(np.float32)
+        return jnp.asarray(v / np.linalg.norm(v, axis=1, keepdims=True))
+
     pts = SurfacePoints(
         position=jnp.asarray(rng.normal(size=(n, 3)), jnp.float32), normal=unit(3),
         shading_normal=unit(3), tangent=jnp.concatenate([unit(3), jnp.ones((n, 1))], 1),
