@@ -104,3 +104,17 @@ def test_invalid_points_shade_to_zero():
     p = type(p)(**{**p.__dict__, "valid": jnp.asarray([True, False, True])})
     got = np.asarray(shade(p, scene))
     assert np.all(got[1] == 0) and np.all(got[0] > 0), got
+
+
+def test_view_depth_is_the_distance_along_the_camera_axis():
+    from jaxrender.scene import look_at
+    from jaxrender.shading import view_depth
+
+    rng = np.random.default_rng(21)
+    eye, target = rng.normal(size=3) * 3.0, rng.normal(size=3)
+    camera = look_at(tuple(eye), tuple(target))
+    pos = rng.normal(size=(9, 3)).astype(np.float32) * 4.0
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    got = np.asarray(view_depth(points(9, position=pos), camera))
+    np.testing.assert_allclose(got, (pos - eye) @ forward, rtol=1e-5, atol=1e-5,
+                               err_msg="view_depth against (p - eye) . forward")
