@@ -16,16 +16,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
+import os
 import statistics
 import sys
+import time
 from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
 import jax
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+# This checkout's package, unless PYTHONPATH names a tree of its own: the side-by-side runs
+# (`PYTHONPATH=.v/v0 python benchmarks/bench_sequence.py`) must time the tree they name.
+if not any((Path(p) / "jaxrender").is_dir()
+           for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p):
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from jaxrender.bench.report import print_table  # noqa: E402
 from jaxrender.parsing import parse_spec, resolution_arg  # noqa: E402
