@@ -5,13 +5,13 @@
 #   prepare: bash benchmarks/variants/prepare.sh (.v/v0 = 9a6cd99, .v/<name> = HEAD + <name>.patch)
 #   device runs (carry .whl, .v):
 #     bash benchmarks/gpu_thirteenth.sh shader sequence
-#     TREES="after os_adds" PIPELINES="object_space tads" bash benchmarks/gpu_thirteenth.sh sequence
+#     TREES="after v0" PIPELINES="object_space tads" bash benchmarks/gpu_thirteenth.sh sequence
 #     TREES="after dacs_adds" PIPELINES=dacs SEQ_SCENES="foliage room thin stripes" \
 #       bash benchmarks/gpu_thirteenth.sh sequence
 # The trees of that session: v0 = 9a6cd99 (before); v1 = this shader without its stores;
 # v5 = without the surface point's store; h_store = with the half vector stored too;
-# os_adds, dacs_adds = object space's footprint and DACS's per-level decision and
-# interpolation with their short sums as adds (jaxrender/fusion.py).
+# dacs_adds = DACS's per-level decision and interpolation with their short sums as adds
+# (jaxrender/fusion.py; object space's footprint got the same rewrite in the tree itself).
 # shader: bench_shader.py (one screen of surface_points + shade: kernels, launches) for this
 #   checkout ("after") and each of SHADER_TREES (default "v0 v1 v5 h_store").
 # sequence: per-frame ms inside a 16-frame pan with --checksum (equal image sums and counts say

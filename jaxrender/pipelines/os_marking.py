@@ -15,6 +15,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
+from jaxrender.fusion import sum_small
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet
 from jaxrender.types import Array
 
@@ -48,9 +49,9 @@ def footprint(scene, sheet: ShadeSheet, tri: Array, bary: Array, dbx: Array, dby
     covered = tri >= 0
     t = jnp.maximum(tri, 0)
     c = sheet.corner_st[t]  # [P, 3, 2]
-    st = jnp.sum(bary[:, :, None] * c, axis=1)
-    dx = jnp.sum(dbx[:, :, None] * c, axis=1)
-    dy = jnp.sum(dby[:, :, None] * c, axis=1)
+    st = sum_small(bary[:, :, None] * c, axis=1)
+    dx = sum_small(dbx[:, :, None] * c, axis=1)
+    dy = sum_small(dby[:, :, None] * c, axis=1)
     return Footprint(scene.tri_object[t], st, dx, dy, covered)
 
 
@@ -63,8 +64,8 @@ def raw_lod(fp: Footprint, sheet: ShadeSheet, aniso_taps: int):
     axis float32[P, 2] (chart units) and the top level float32[P] of each pixel's object."""
     res = sheet.obj_res[fp.obj]
     rf = res.astype(jnp.float32)
-    lx = jnp.sqrt(jnp.sum(jnp.square(fp.dst_dx), axis=-1)) * rf
-    ly = jnp.sqrt(jnp.sum(jnp.square(fp.dst_dy), axis=-1)) * rf
+    lx = jnp.sqrt(sum_small(jnp.square(fp.dst_dx))) * rf
+    ly = jnp.sqrt(sum_small(jnp.square(fp.dst_dy))) * rf
     major, minor = jnp.maximum(lx, ly), jnp.minimum(lx, ly)
     n = int(aniso_taps)
     size = major if n == 1 else jnp.maximum(minor, major / n)
