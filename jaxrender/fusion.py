@@ -21,27 +21,26 @@ from jax import lax
 from jaxrender.types import Array
 
 
+def _slices(x: Array, axis: int, keepdims: bool) -> list[Array]:
+    axis = axis % x.ndim
+    return [lax.index_in_dim(x, i, axis, keepdims=keepdims) for i in range(x.shape[axis])]
+
+
 def sum_small(x: Array, axis: int = -1, keepdims: bool = False) -> Array:
     """``jnp.sum`` over a short static axis (3 components, 3 corners, a few lights), as adds."""
-    axis = axis % x.ndim
-    parts = [lax.index_in_dim(x, i, axis, keepdims=keepdims) for i in range(x.shape[axis])]
-    return functools.reduce(operator.add, parts)
+    return functools.reduce(operator.add, _slices(x, axis, keepdims))
 
 
 def max_small(x: Array, axes: tuple[int, ...]) -> Array:
     """``jnp.max`` over short static axes, keeping them, as maxima (exact in any order)."""
     for axis in axes:
-        axis = axis % x.ndim
-        parts = [lax.index_in_dim(x, i, axis, keepdims=True) for i in range(x.shape[axis])]
-        x = functools.reduce(jnp.maximum, parts)
+        x = functools.reduce(jnp.maximum, _slices(x, axis, True))
     return x
 
 
 def all_small(x: Array, axis: int = -1) -> Array:
     """``jnp.all`` over a short static axis, as ands."""
-    axis = axis % x.ndim
-    parts = [lax.index_in_dim(x, i, axis, keepdims=False) for i in range(x.shape[axis])]
-    return functools.reduce(operator.and_, parts)
+    return functools.reduce(operator.and_, _slices(x, axis, False))
 
 
 def materialize(x: Array) -> Array:
