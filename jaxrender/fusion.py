@@ -13,6 +13,7 @@ between stages (the surface point, the mapped normal, the textured albedo).
 from __future__ import annotations
 
 import functools
+import itertools
 import operator
 
 import jax.numpy as jnp
@@ -57,6 +58,6 @@ def materialize_all(*arrays: Array) -> tuple[Array, ...]:
     n = arrays[0].shape[0]
     flat = [a.reshape(n, -1) for a in arrays]
     joined = materialize(jnp.concatenate(flat, axis=1))
-    widths = [f.shape[1] for f in flat]
-    starts = [sum(widths[:i]) for i in range(len(widths))]
-    return tuple(joined[:, s:s + w].reshape(a.shape) for a, s, w in zip(arrays, starts, widths))
+    ends = list(itertools.accumulate(f.shape[1] for f in flat))
+    starts = [0] + ends[:-1]
+    return tuple(joined[:, s:e].reshape(a.shape) for a, s, e in zip(arrays, starts, ends))

@@ -20,7 +20,7 @@ SHADOW_MAP = 32
 
 
 @pytest.mark.parametrize("shape,axis", [((7, 3), -1), ((5, 3, 4), 1), ((6, 2, 3), -1), ((3, 9), 0)])
-def test_sum_small_and_all_small_equal_jnp(shape, axis):
+def test_short_reductions_equal_jnp(shape, axis):
     rng = np.random.default_rng(sum(shape))
     x = rng.normal(size=shape).astype(np.float32)
     for keep in (False, True):
