@@ -7,10 +7,12 @@ LOD from the sample's footprint (the barycentric derivatives per pixel scaled by
 sample spacing). Reconstruction: the box filter, the mean of the k^2 sample colours (empty
 samples count as black background).
 
-Memory: the samples are processed one at a time in a ``lax.fori_loop`` that accumulates the
-image, and each sample's covered points are shaded through the compacted, chunked dispatch
-(``pipelines.dispatch``, by default one screen-sized launch per sample), so the peak is one
-(H, W) visibility buffer plus one screen of shading, whatever k is, not k^2 visibility buffers.
+Passes: the samples run a few at a time (``samples_per_pass``, 8 by default) in a
+``lax.fori_loop`` that accumulates the image. A pass rasterizes its samples in one traversal
+(each bounding-box pixel of a triangle tests every sample of the pass, each sample's result
+the one it gets alone) and shades all their covered points in one launch, so a pass's loops,
+launches and bounding boxes serve all of its samples. The peak memory is one pass's visibility
+buffers and shading (at most 2^24 lanes by default), whatever k is, not k^2 buffers.
 
 Alpha-tested scenes (``effects.alpha_test``): a fragment that fails the alpha test at its
 sample position is discarded before the depth test, so the sample sees what lies behind it.
@@ -60,15 +62,19 @@ class ReferenceConfig(RenderConfig):
     idle lanes of one; it shows in the dispatch counts lanes, chunks and helper_lanes);
     convergence: also render at
     2k and report ``counts['convergence_psnr']`` (LDR PSNR between the k and 2k images; costs
-    5x the plain render)."""
+    5x the plain render); samples_per_pass: samples rasterized in one traversal and shaded in
+    one launch (0: automatic, up to 8 and 2^24 lanes a pass). The image is the same for any
+    value; lanes, chunks and work_items follow the passes."""
 
     k: int = DEFAULT_K
     chunk: int = 0
     convergence: bool = False
+    samples_per_pass: int = 0
 
     TRACED_FIELDS: ClassVar[tuple[str, ...]] = ("k",)
-    # Not ``chunk``: counts["lanes"], ["chunks"] and ["helper_lanes"] (the idle lanes of the
-    # last chunk of each sample) are read off the dispatch and depend on it.
+    # Not ``chunk`` nor ``samples_per_pass``: counts["lanes"], ["chunks"] and ["helper_lanes"]
+    # (the idle lanes of the last chunk of each pass) are read off the dispatch and depend on
+    # them, and ["work_items"] on the passes.
     OUTPUT_NEUTRAL: ClassVar[tuple[str, ...]] = ()
 
     def __post_init__(self):
@@ -77,6 +83,9 @@ class ReferenceConfig(RenderConfig):
             raise ValueError(f"reference: k must be >= 1, got {self.k}")
         if int(self.chunk) < 0:
             raise ValueError(f"reference: chunk must be >= 0 (0: automatic), got {self.chunk}")
+        if int(self.samples_per_pass) < 0:
+            raise ValueError("reference: samples_per_pass must be >= 0 (0: automatic), got "
+                             f"{self.samples_per_pass}")
 
 
 # ------------------------------------------------------------------ visibility of one sample
@@ -88,26 +97,29 @@ def _bary_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, w: int, 
     return bary, ddx, ddy
 
 
-def _visibility(scene: Scene, camera: Camera, clip: Array, offset: Array, cfg, inv_k: Array):
-    """VisBuffer (H, W) of one sample at the traced fixed-point offset; fragments failing the
-    alpha test are discarded before the depth test. Returns (vis, counts)."""
+def _visibility(scene: Scene, camera: Camera, clip: Array, offsets: Array, live: Array, cfg,
+                inv_k: Array):
+    """VisBuffers [S, H, W] of S samples at the traced fixed-point offsets int32[S, 2], in one
+    traversal; fragments failing the alpha test are discarded before the depth test.
+    Returns (vis, counts)."""
     w, h = cfg.width, cfg.height
     faces = scene.faces
     n_tris = faces.shape[0]
-    off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
+    off_px = offsets.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
 
-    def alpha_keep(c):
+    def alpha_keep(c):  # c.covered: [S, capacity]
         with jax.enable_x64(False):
-            tri = jnp.where(c.covered, c.tri, 0).astype(jnp.int32)
-            x = c.px.astype(jnp.float32) + off_px[0]
-            y = c.py.astype(jnp.float32) + off_px[1]
+            tri = jnp.where(c.covered, c.tri[None], 0).astype(jnp.int32)
+            x = c.px.astype(jnp.float32)[None] + off_px[:, :1]
+            y = c.py.astype(jnp.float32)[None] + off_px[:, 1:]
+            tri, x, y = tri.reshape(-1), x.reshape(-1), y.reshape(-1)
             b, bx, by = _bary_at(tri, x, y, clip, faces, w, h)
             pts = surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
-            return alpha_test(pts, scene)
+            return alpha_test(pts, scene).reshape(c.covered.shape)
 
     vis, counts = sample_visibility(
-        clip, opaque_faces(scene), w, h, offset, work_capacity=default_work_capacity(n_tris, w, h),
-        clip_capacity=default_clip_capacity(n_tris),
+        clip, opaque_faces(scene), w, h, offsets, work_capacity=default_work_capacity(n_tris, w, h),
+        clip_capacity=default_clip_capacity(n_tris), live=live,
         keep=alpha_keep if scene.effects.alpha_test else None)
     return vis, {key: v.astype(jnp.int32) for key, v in counts.items()}
 
@@ -117,11 +129,25 @@ def _visibility(scene: Scene, camera: Camera, clip: Array, offset: Array, cfg, i
 # The transparent pass's counts summed over the samples (the layers' maximum is a maximum).
 TRANSPARENT_SUMS = ("transparent_invocations", "transparent_fragments", "transparent_passes",
                     "transparent_bytes", "overflow")
+RUNNING_MAXIMA = ("transparent_layers_max",)
+
+# Samples rasterized and shaded together, at most: a pass's loops, launches and bounding-box
+# items serve all of them. The automatic choice also keeps a pass within LANES_PER_PASS
+# shading lanes (8 at 1920x1080), which bounds its memory.
+MAX_SAMPLES_PER_PASS = 8
+LANES_PER_PASS = 1 << 24
+
+
+def samples_per_pass(cfg: ReferenceConfig) -> int:
+    """The samples of one pass: cfg.samples_per_pass, or automatic for 0."""
+    if cfg.samples_per_pass:
+        return int(cfg.samples_per_pass)
+    return max(1, min(MAX_SAMPLES_PER_PASS, LANES_PER_PASS // (cfg.width * cfg.height)))
 
 
 def _offset(s: Array, k: Array) -> Array:
-    """int32[2]: fixed-point offset of stratified sample s (row-major) of k x k, computed in
-    integers: round((i + 0.5) / k * 2^bits) = floor(((2i + 1) 2^bits + k) / 2k), as
+    """int32[2, ...]: fixed-point offset of stratified sample s (row-major) of k x k, computed
+    in integers: round((i + 0.5) / k * 2^bits) = floor(((2i + 1) 2^bits + k) / 2k), as
     ``samples.to_fixed(samples.stratified(k))`` gives."""
     i, j = s % k, s // k
     one = 1 << SUBPIXEL_BITS
@@ -129,26 +155,52 @@ def _offset(s: Array, k: Array) -> Array:
 
 
 def _shade_samples(covered, points_of, shade_fn, out, chunk: int):
-    """One sample's covered pixels shaded: in one screen-sized launch by default (chunk 0),
-    else through the compacted dispatch in chunks of ``chunk``."""
+    """A pass's covered samples shaded: in one launch of every sample of every pixel by
+    default (chunk 0), else through the compacted dispatch in chunks of ``chunk``."""
     if chunk == 0:
         return dispatch.shade_in_place(covered, points_of, shade_fn, out)
     return dispatch.shade(dispatch.WorkList.of(covered), points_of, shade_fn, out, chunk)
 
 
+def _accumulate(counts: dict, new: dict) -> dict:
+    return {key: jnp.maximum(counts[key], new[key]) if key in RUNNING_MAXIMA
+            else counts[key] + new[key] for key in counts}
+
+
+def _transparent(scene, camera, clip, offsets, live, depth, rgb, inv_k, cfg):
+    """Every layer of each live sample of a pass, sorted, over its opaque colour rgb [S, P, 3];
+    one sample at a time. Returns (rgb, counts summed over the samples)."""
+    zero = {key: jnp.int32(0) for key in TRANSPARENT_SUMS + RUNNING_MAXIMA}
+
+    def one(t, carry):
+        def run(c):
+            out, tc = sample_pass(scene, camera, clip, offsets[t], depth[t], c[0][t], inv_k, cfg)
+            return c[0].at[t].set(out), _accumulate(c[1], {key: tc[key] for key in c[1]})
+
+        return jax.lax.cond(live[t], run, lambda c: c, carry)
+
+    return jax.lax.fori_loop(0, offsets.shape[0], one, (rgb, zero))
+
+
 def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Frame:
     """The reference image at k x k samples per pixel; k is traced (int32[]), so every k
-    shares one compiled program. Only cfg's width, height and chunk are used."""
+    shares one compiled program. Only cfg's width, height, chunk and samples_per_pass are
+    used. The samples run in passes of ``samples_per_pass(cfg)``; a last pass with fewer
+    samples left runs its extra samples dead (counted in lanes, not in invocations)."""
     w, h = cfg.width, cfg.height
     n_pix = w * h
+    n_s = samples_per_pass(cfg)
     with jax.named_scope("transform"):
         clip = world_to_clip(scene.positions, camera, w / h)
     inv_k = 1.0 / k.astype(jnp.float32)
 
-    def one_sample(s, carry):
+    def one_pass(p, carry):
         acc, any_cov, counts = carry
+        s = p * n_s + jnp.arange(n_s)
+        live = s < k * k
+        offsets = _offset(jnp.where(live, s, p * n_s), k).T  # a dead sample repeats a live one
         with jax.named_scope("raster"):
-            vis, rc = _visibility(scene, camera, clip, _offset(s, k), cfg, inv_k)
+            vis, rc = _visibility(scene, camera, clip, offsets, live, cfg, inv_k)
         tri = vis.tri_id.reshape(-1)
         bary = vis.bary.reshape(-1, 3)
         ddx = vis.dbary_dx.reshape(-1, 3) * inv_k  # footprint of one sample, not one pixel
@@ -159,29 +211,28 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
 
         with jax.named_scope("shade"):
             rgb, work = _shade_samples(tri >= 0, points_of, lambda p: shade(p, scene),
-                                       jnp.zeros((n_pix, 3), jnp.float32), cfg.chunk)
+                                       jnp.zeros((n_s * n_pix, 3), jnp.float32), cfg.chunk)
+        rgb = rgb.reshape(n_s, n_pix, 3)
         new = {"shade_invocations": work.invocations, "lanes": work.lanes,
                "chunks": work.chunks, "fragments": rc["fragments"],
                "work_items": rc["work_items"]}
-        if scene.effects.transparency:  # every layer of this sample, sorted, over it
+        if scene.effects.transparency:
             with jax.named_scope("transparent"):
-                rgb, tc = sample_pass(scene, camera, clip, _offset(s, k), vis.depth.reshape(-1),
-                                      rgb, inv_k, cfg)
-            new.update({key: tc[key] for key in TRANSPARENT_SUMS})
+                rgb, tc = _transparent(scene, camera, clip, offsets, live,
+                                       vis.depth.reshape(n_s, n_pix), rgb, inv_k, cfg)
+            new.update(tc)
             new["shade_invocations"] = new["shade_invocations"] + tc["transparent_invocations"]
-            new["transparent_layers_max"] = jnp.maximum(
-                counts["transparent_layers_max"], tc["transparent_layers_max"]) - counts[
-                "transparent_layers_max"]  # accumulated as a running maximum
-        counts = {key: counts[key] + new[key] for key in counts}
-        return acc + rgb, any_cov | (tri >= 0), counts
+        for t in range(n_s):  # sample by sample, in order: the sum of one sample per pass
+            acc = acc + rgb[t]
+        covered = jnp.any(tri.reshape(n_s, n_pix) >= 0, axis=0)
+        return acc, any_cov | covered, _accumulate(counts, new)
 
-    zero = jnp.int32(0)
     keys = ("shade_invocations", "lanes", "chunks", "fragments", "work_items")
     if scene.effects.transparency:
-        keys = keys + TRANSPARENT_SUMS + ("transparent_layers_max",)
-    counts0 = {key: zero for key in keys}
+        keys = keys + TRANSPARENT_SUMS + RUNNING_MAXIMA
+    counts0 = {key: jnp.int32(0) for key in keys}
     init = (jnp.zeros((n_pix, 3), jnp.float32), jnp.zeros((n_pix,), bool), counts0)
-    acc, any_cov, counts = jax.lax.fori_loop(0, k * k, one_sample, init)
+    acc, any_cov, counts = jax.lax.fori_loop(0, (k * k + n_s - 1) // n_s, one_pass, init)
     with jax.named_scope("reconstruct"):
         image = (acc * (inv_k * inv_k)).reshape(h, w, 3)
     counts = dict(counts, covered_pixels=jnp.sum(any_cov, dtype=jnp.int32),

@@ -259,6 +259,8 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     peel = peel and traversal == "gpu"
     if traversal == "cpu":
         traversal = "bbox" if width * height < SPANS_MIN_PIXELS else "spans"
+    if traversal == "spans" and offset.ndim == 2:
+        traversal = "bbox"  # spans are exact for one sample position only
     elif traversal == "gpu":
         traversal = "recompute" if n_tris * RECOMPUTE_MIN_DENSITY >= width * height else "bbox"
 
@@ -306,37 +308,60 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
 
 def sample_visibility(clip, faces, width, height, offset, *, cull_backfaces=False,
                       work_capacity, clip_capacity, traversal="auto", barycentrics=True,
-                      keep=None):
-    """The nearest fragment of every pixel at one sample point: the per-sample core of every
-    rasterizing entry, for use inside a program (no input checks).
+                      keep=None, live=None):
+    """The nearest fragment of every pixel at one sample point, or at S sample points in one
+    traversal: the per-sample core of every rasterizing entry, for use inside a program (no
+    input checks).
 
-    ``offset``: int64[2] (or int32[2]) fixed-point sample offset inside the pixel. ``keep``:
-    an optional ``keep(chunk) -> bool[capacity]`` that discards covered fragments before the
-    depth test (a per-sample alpha test); discarded fragments still count in ``fragments``.
-    Returns (VisBuffer, or DepthBuffer without ``barycentrics``, with empty counts; counts
-    dict of int64: work_items, clipped, dropped_nonfinite, fragments)."""
+    ``offset``: int64[2] (or int32[2]) fixed-point sample offset inside the pixel; or [S, 2]:
+    every work item tests all S (the union of their bounding boxes is traversed once), and
+    each sample's buffer is the one it gets alone, bit for bit, with a leading S axis on every
+    field. ``live``: bool[S], the samples to keep (a dead sample covers nothing and counts no
+    fragment; its offset should be a live one's, so that it widens no box). ``keep``: an
+    optional ``keep(chunk) -> bool[capacity]`` (bool[S, capacity]) that discards covered
+    fragments before the depth test (a per-sample alpha test); discarded fragments still
+    count in ``fragments``. Returns (VisBuffer, or DepthBuffer without ``barycentrics``, with
+    empty counts; counts dict of int64: work_items (bounding-box pixels, each testing every
+    sample), clipped, dropped_nonfinite, fragments)."""
     with jax.enable_x64(True):
         offset = offset.astype(jnp.int64)
         n_pix = width * height
+        single = offset.ndim == 1
+        n_samples = 1 if single else offset.shape[0]
+
+        def per_sample(x):  # an item's value against a chunk's [S, capacity] values
+            return x if single else jnp.broadcast_to(x[None], (n_samples,) + x.shape)
 
         def scatter_min(st, c):
             zb, frags = st
-            covered = c.covered if keep is None else c.covered & keep(c)
-            pix = jnp.where(covered, c.py * width + c.px, n_pix)
-            zb = zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop")
-            return zb, frags + jnp.sum(c.covered, dtype=jnp.int64)
+            covered = c.covered if live is None else c.covered & live[:, None]
+            hit = covered if keep is None else covered & keep(c)
+            # Sample s of pixel p is entry s * n_pix + p.
+            pix = per_sample(c.py * width + c.px)
+            if not single:
+                pix = pix + (jnp.arange(n_samples, dtype=pix.dtype) * n_pix)[:, None]
+            pix = jnp.where(hit, pix, n_samples * n_pix)
+            key = depth_key(c.depth, per_sample(c.tri))
+            zb = zb.at[pix.reshape(-1)].min(key.reshape(-1), mode="drop")
+            return zb, frags + jnp.sum(covered, dtype=jnp.int64)
 
-        zbuf = jnp.full((n_pix,), EMPTY_KEY, jnp.int64)
+        zbuf = jnp.full((n_samples * n_pix,), EMPTY_KEY, jnp.int64)
         (zbuf, frags), counts = traverse(
             clip, faces, width, height, cull_backfaces, offset, work_capacity, clip_capacity,
             (zbuf, jnp.int64(0)), scatter_min, traversal,
         )
         with jax.named_scope("resolve"):
-            if not barycentrics:
-                vis = DepthBuffer(*decode_keys(zbuf, width, height))
+            off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
+
+            def one(zb, off):
+                if not barycentrics:
+                    return DepthBuffer(*decode_keys(zb, width, height))
+                return resolve(zb, clip, faces, width, height, off)
+
+            if offset.ndim == 1:
+                vis = one(zbuf, off_px)
             else:
-                off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
-                vis = resolve(zbuf, clip, faces, width, height, off_px)
+                vis = jax.vmap(one)(zbuf.reshape(n_samples, n_pix), off_px)
         return vis, dict(counts, fragments=frags)
 
 
@@ -348,10 +373,6 @@ def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap
                                  traversal=traversal, barycentrics=barycentrics)
 
     offs = jnp.asarray(offsets, jnp.int64)
-    if len(offsets) == 1:
-        vis, counts = one_sample(offs[0])
-    else:
-        vis, counts = jax.lax.map(one_sample, offs)
-        counts = {k: jnp.sum(v) if k in ("fragments", "work_items") else v[0]
-                  for k, v in counts.items()}
+    # Several samples: one traversal tests all of them at each bounding-box pixel.
+    vis, counts = one_sample(offs[0] if len(offsets) == 1 else offs)
     return dataclasses.replace(vis, counts=Counts.pack(counts))

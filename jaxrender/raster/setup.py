@@ -16,6 +16,8 @@ In these y-down coordinates a GL front face (counter-clockwise in NDC) has negat
 
 from __future__ import annotations
 
+import functools
+
 import jax.numpy as jnp
 
 from jaxrender.types import Array, pytree_dataclass
@@ -40,7 +42,7 @@ class TriSetup:
     top_left: Array  # float64[N, 3] 1 where the edge is top or left (E == 0 counts as covered)
     z: Array  # float32[N, 3] window depth of the vertices
     inv_area: Array  # float32[N] 1 / (2 * area) in fixed-point units
-    x0: Array  # int32[N] first pixel column of the bounding box (for this sample offset)
+    x0: Array  # int32[N] first pixel column of the bounding box (for these sample offsets)
     y0: Array  # int32[N]
     bw: Array  # int32[N] bounding box width in pixels (>= 1)
     bh: Array  # int32[N] bounding box height in rows; 0 for a slot that produces nothing
@@ -70,7 +72,8 @@ def setup_triangles(
     """Set up N triangle slots (float32[N, 3, 4] clip coordinates, all inside the guard band).
 
     ``offset`` is the sample position inside the pixel in fixed point, int64[2] (128, 128 for
-    the centre). Must be called with 64-bit types enabled.
+    the centre), or int64[S, 2] for S samples tested per work item (the bounds then hold the
+    pixels of every one). Must be called with 64-bit types enabled.
     """
     sx, sy, z = snap(tri_clip, width, height)
     return setup_snapped(sx, sy, z, valid, tri_ids, width, height, offset, cull_backfaces)
@@ -95,16 +98,19 @@ def setup_snapped(sx: Array, sy: Array, z: Array, valid: Array, tri_ids: Array, 
     top_left = ((dy < 0) | ((dy == 0) & (dx > 0))).astype(jnp.float64)
 
     # Pixels whose sample point (p * 256 + offset) can lie inside [min, max]; exact, since
-    # dividing by a power of two is exact in floating point.
+    # dividing by a power of two is exact in floating point. With several offsets, the pixels
+    # where any of them can (the union of their boxes).
     # Minima and maxima over the three vertices written out (exact either way): XLA CPU hands
     # a reduction over an axis of 3 to a library call, far slower than two elementwise ops.
-    ox, oy = offset[0].astype(jnp.float64), offset[1].astype(jnp.float64)
+    offs = [o.astype(jnp.float64) for o in offset.reshape(-1, 2)]
+    ox_lo, oy_lo = functools.reduce(jnp.minimum, offs)
+    ox_hi, oy_hi = functools.reduce(jnp.maximum, offs)
     lo = lambda v: jnp.minimum(jnp.minimum(v[:, 0], v[:, 1]), v[:, 2])
     hi = lambda v: jnp.maximum(jnp.maximum(v[:, 0], v[:, 1]), v[:, 2])
-    x0 = jnp.maximum(jnp.ceil((lo(sx) - ox) / SUBPIXEL), 0.0)
-    x1 = jnp.minimum(jnp.floor((hi(sx) - ox) / SUBPIXEL), width - 1.0)
-    y0 = jnp.maximum(jnp.ceil((lo(sy) - oy) / SUBPIXEL), 0.0)
-    y1 = jnp.minimum(jnp.floor((hi(sy) - oy) / SUBPIXEL), height - 1.0)
+    x0 = jnp.maximum(jnp.ceil((lo(sx) - ox_hi) / SUBPIXEL), 0.0)
+    x1 = jnp.minimum(jnp.floor((hi(sx) - ox_lo) / SUBPIXEL), width - 1.0)
+    y0 = jnp.maximum(jnp.ceil((lo(sy) - oy_hi) / SUBPIXEL), 0.0)
+    y1 = jnp.minimum(jnp.floor((hi(sy) - oy_lo) / SUBPIXEL), height - 1.0)
     bw = jnp.maximum(x1 - x0 + 1, 0.0).astype(jnp.int32)
     bh = jnp.maximum(y1 - y0 + 1, 0.0).astype(jnp.int32)
     keep = valid & (area2 != 0)

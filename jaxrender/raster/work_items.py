@@ -38,7 +38,8 @@ class Triangles:
 
 @pytree_dataclass
 class WorkChunk:
-    """One chunk of work items; arrays of shape [capacity]."""
+    """One chunk of work items; arrays of shape [capacity], but ``covered`` and ``depth``, which
+    are [S, capacity] when each item tests S samples (``items_from_setup``)."""
 
     slot: Array  # int32 triangle slot in the setup arrays
     tri: Array  # int32 original triangle id
@@ -113,17 +114,25 @@ def chunk_items(setup: TriSetup, incl: Array, base: Array, capacity: int,
 
 
 def items_from_setup(su: TriSetup, slot: Array, j: Array, live: Array, offset: Array) -> WorkChunk:
-    """Work items from the setup of each item's own triangle (arrays of shape [capacity])."""
+    """Work items from the setup of each item's own triangle (arrays of shape [capacity]).
+    ``offset`` int64[2]: one sample per item; int64[S, 2]: S samples per item, and the chunk's
+    ``covered`` and ``depth`` are [S, capacity]. Each sample's edge values are the same exact
+    integers either way, so each gives the bits it gives alone."""
     bw = su.bw
     row = jnp.floor((j.astype(jnp.float64) + 0.5) / bw.astype(jnp.float64)).astype(jnp.int32)
     px = su.x0 + (j - row * bw)
     py = su.y0 + row
-    sx = (px * SUBPIXEL).astype(jnp.float64) + offset[0].astype(jnp.float64)
-    sy = (py * SUBPIXEL).astype(jnp.float64) + offset[1].astype(jnp.float64)
-    e = su.edge_a * sx[:, None] + su.edge_b * sy[:, None] + su.edge_c
-    covered = live & jnp.all(e + su.top_left > 0, axis=1)
-    z = su.z
-    depth = window_depth([e[:, i] for i in range(3)], [z[:, i] for i in range(3)], su.inv_area)
+    offs = offset.reshape(-1, 2, 1).astype(jnp.float64)  # [S, 2, 1] against [1, capacity]
+    sx = (px * SUBPIXEL).astype(jnp.float64)[None] + offs[:, 0]
+    sy = (py * SUBPIXEL).astype(jnp.float64)[None] + offs[:, 1]
+    e = su.edge_a[None] * sx[..., None] + su.edge_b[None] * sy[..., None] + su.edge_c[None]
+    # A reduce, not ands: it stores ``covered``, which the depth test and an alpha test both
+    # read; fused into each of them instead, the edge functions were computed again in each.
+    covered = live[None] & jnp.all(e + su.top_left[None] > 0, axis=-1)
+    depth = window_depth([e[..., i] for i in range(3)], [su.z[None, :, i] for i in range(3)],
+                         su.inv_area[None])
+    if offset.ndim == 1:
+        covered, depth = covered[0], depth[0]
     return WorkChunk(slot, su.tri, px, py, covered, depth)
 
 

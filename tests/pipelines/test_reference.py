@@ -131,16 +131,39 @@ def test_equals_rasterizer_samples_shaded_and_averaged(scene_a):
 
 
 def test_the_in_place_launch_equals_the_compacted_one(scene_a):
-    """chunk 0 shades each sample in place in one screen-sized launch; chunk = W * H compacts
-    the covered pixels into one launch of the same size: the same image and the same counts."""
-    k, cam = 3, _camera()
-    in_place = render(scene_a, cam, _cfg(k))
-    compacted = render(scene_a, cam, _cfg(k, chunk=W * H))
+    """chunk 0 shades each pass of samples in place in one launch of its samples' pixels;
+    chunk = that size compacts the covered samples into one launch of the same size: the same
+    image and the same counts."""
+    k, cam, per_pass = 3, _camera(), 4
+    in_place = render(scene_a, cam, _cfg(k, samples_per_pass=per_pass))
+    compacted = render(scene_a, cam, _cfg(k, samples_per_pass=per_pass, chunk=per_pass * W * H))
     np.testing.assert_array_equal(np.asarray(in_place.image), np.asarray(compacted.image),
                                   err_msg="image: in place vs compacted")
     for key in ("shade_invocations", "lanes", "chunks", "helper_lanes"):
         assert int(in_place.counts[key]) == int(compacted.counts[key]), key
-    assert int(in_place.counts["chunks"]) == k * k  # one launch per sample, every one covered
+    assert int(in_place.counts["chunks"]) == 3  # 9 samples in passes of 4: 3 launches
+
+
+@pytest.mark.parametrize("alpha", [False, True])
+def test_passes_of_any_size_give_the_same_image(scene_a, alpha):
+    """The samples of a pass share one traversal and one launch; the image and the work that
+    depends on the samples alone are the same bits for any pass size, dead samples (9 in passes
+    of 4 or 8) included; lanes are the passes' launches, whole."""
+    scene = _alpha_scene() if alpha else scene_a
+    k, cam = 3, _camera(0.07)
+    frames = {n: render(scene, cam, _cfg(k, samples_per_pass=n)) for n in (1, 4, 8)}
+    for n in (4, 8):
+        np.testing.assert_array_equal(np.asarray(frames[n].image), np.asarray(frames[1].image),
+                                      err_msg=f"image: passes of {n} vs one sample a pass")
+        for key in ("shade_invocations", "fragments", "covered_pixels", "samples_per_pixel"):
+            assert int(frames[n].counts[key]) == int(frames[1].counts[key]), (n, key)
+        passes = -(-k * k // n)
+        assert int(frames[n].counts["lanes"]) == passes * n * W * H, n
+        assert int(frames[n].counts["chunks"]) == passes, n
+    # a pass lists each bounding-box pixel once for all of its samples
+    assert int(frames[8].counts["work_items"]) < int(frames[1].counts["work_items"])
+    with pytest.raises(ValueError, match="samples_per_pass must be"):
+        _cfg(2, samples_per_pass=-1)
 
 
 def test_box_filter_of_a_known_edge(scene_a):
@@ -188,9 +211,8 @@ def test_convergence_estimate(scene_a):
     assert float(frame.counts["convergence_psnr"]) == pytest.approx(fine, abs=1e-4)
 
 
-def test_alpha_test_discards_before_the_depth_test():
-    """An alpha-tested quad, transparent on its left half, in front of a red quad: the left
-    half of the image is the red quad, the right half the front quad."""
+def _alpha_scene():
+    """An alpha-tested quad, transparent on its left half, in front of a red quad."""
     tex = np.ones((64, 64, 4))
     tex[:, :32, 3] = 0.0  # u < 0.5 transparent
     front = _quad([(-2, -2, -1), (2, -2, -1), (2, 2, -1), (-2, 2, -1)], (0, 0, 1), 0)
@@ -198,8 +220,14 @@ def test_alpha_test_discards_before_the_depth_test():
     mats = [Material("leaf", albedo=(0.9, 0.9, 0.9), texture=0, alpha_tested=True,
                      alpha_cutoff=0.5),
             Material("red", albedo=(0.8, 0.1, 0.1))]
-    scene = build_scene([front, back], mats, [tex], make_lights([((0, 0, 1), np.pi)]),
-                        _camera(), name="alpha_test")
+    return build_scene([front, back], mats, [tex], make_lights([((0, 0, 1), np.pi)]),
+                       _camera(), name="alpha_test")
+
+
+def test_alpha_test_discards_before_the_depth_test():
+    """An alpha-tested quad, transparent on its left half, in front of a red quad: the left
+    half of the image is the red quad, the right half the front quad."""
+    scene = _alpha_scene()
     assert scene.effects.alpha_test
     img = np.asarray(render(scene, _camera(), _cfg(4)).image)
     np.testing.assert_allclose(img[:, : W // 2 - 4], np.broadcast_to([0.8, 0.1, 0.1], (H, 20, 3)),

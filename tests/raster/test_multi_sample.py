@@ -1,0 +1,68 @@
+"""Several samples in one traversal (``sample_visibility`` with offsets [S, 2]): each sample's
+buffer must be the one it gets alone, bit for bit, on every traversal, with clipped triangles,
+a keep filter, dead samples and chunks far smaller than the work; its box is the union of the
+samples' boxes, so it lists fewer work items than the samples one by one."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrender.raster.rasterize import sample_visibility
+from tests.raster.conftest import gl_clip, pad
+from tests.raster.test_exact import H, W, _random_scene
+
+FIELDS = ("tri_id", "depth", "bary", "dbary_dx", "dbary_dy")
+
+
+def _clipped_scene(rng):
+    p = rng.uniform(-3, 3, (300, 3))
+    p[:, 2] = rng.uniform(-6, 1, 300)  # some triangles cross the near plane
+    return pad(gl_clip(p, aspect=W / H), np.arange(300).reshape(-1, 3).astype(np.int32))
+
+
+@pytest.mark.parametrize("traversal", ["bbox", "recompute", "spans", "gpu"])
+@pytest.mark.parametrize("kind", ["mixed_sizes", "clipped"])
+def test_each_sample_equals_its_own_traversal(rng, traversal, kind):
+    clip, faces = _clipped_scene(rng) if kind == "clipped" else _random_scene(rng, kind)
+    n = 5
+    offsets = rng.integers(0, 256, (n, 2)).astype(np.int32)
+    live = np.ones(n, bool)
+    live[rng.integers(n)] = False
+    offsets[~live] = offsets[live][0]  # a dead sample repeats a live one's offset
+    keep_odd = lambda chunk: chunk.tri % 2 == 1  # noqa: E731
+    keep_odd_many = lambda chunk: (chunk.tri % 2 == 1)[None]  # noqa: E731
+    kw = dict(work_capacity=512, clip_capacity=7, traversal=traversal)
+
+    @jax.jit
+    def many(c, f, o, lv):
+        return (sample_visibility(c, f, W, H, o, live=lv, **kw),
+                sample_visibility(c, f, W, H, o, live=lv, keep=keep_odd_many, **kw))
+
+    @jax.jit
+    def one(c, f, o):
+        return (sample_visibility(c, f, W, H, o, **kw),
+                sample_visibility(c, f, W, H, o, keep=keep_odd, **kw))
+
+    c, f = jnp.asarray(clip), jnp.asarray(faces)
+    (vis, counts), (odd, odd_counts) = many(c, f, jnp.asarray(offsets), jnp.asarray(live))
+    fragments, items = 0, 0
+    for s in range(n):
+        (want, want_counts), (want_odd, _) = one(c, f, jnp.asarray(offsets[s]))
+        for name in FIELDS:
+            got = np.asarray(getattr(vis, name))[s]
+            got_odd = np.asarray(getattr(odd, name))[s]
+            if live[s]:
+                np.testing.assert_array_equal(got, np.asarray(getattr(want, name)),
+                                              err_msg=f"{traversal}, sample {s}: {name}")
+                np.testing.assert_array_equal(got_odd, np.asarray(getattr(want_odd, name)),
+                                              err_msg=f"{traversal}, sample {s}, kept: {name}")
+        if live[s]:
+            fragments += int(want_counts["fragments"])
+            items += int(want_counts["work_items"])
+        else:
+            assert np.all(np.asarray(vis.tri_id)[s] == -1), f"dead sample {s} covers pixels"
+    assert fragments > 0
+    assert int(counts["fragments"]) == int(odd_counts["fragments"]) == fragments
+    assert int(counts["clipped"]) == int(want_counts["clipped"])
+    assert 0 < int(counts["work_items"]) < items, (int(counts["work_items"]), items)
