@@ -100,6 +100,7 @@ CASES: dict[str, dict[str, Case]] = {
         "k": Case(F, {}, 2),
         "chunk": Case(F, {}, 64),  # counts lanes, chunks, helper_lanes
         "convergence": Case(F, {}, True),  # adds counts["convergence_psnr"]
+        "samples_per_pass": Case(F, {}, 1),  # counts lanes, chunks, work_items
     },
     "forward": {
         **_blending(),
