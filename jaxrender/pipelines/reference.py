@@ -126,7 +126,8 @@ def _visibility(scene: Scene, camera: Camera, clip: Array, offsets: Array, live:
 
 # ------------------------------------------------------------------ the render
 
-# The transparent pass's counts summed over the samples (the layers' maximum is a maximum).
+# The transparent pass's counts summed over the passes (the layers' maximum is a maximum;
+# transparent_passes counts blending passes, each blending one layer of every sample of a pass).
 TRANSPARENT_SUMS = ("transparent_invocations", "transparent_fragments", "transparent_passes",
                     "transparent_bytes", "overflow")
 RUNNING_MAXIMA = ("transparent_layers_max",)
@@ -167,21 +168,6 @@ def _accumulate(counts: dict, new: dict) -> dict:
             else counts[key] + new[key] for key in counts}
 
 
-def _transparent(scene, camera, clip, offsets, live, depth, rgb, inv_k, cfg):
-    """Every layer of each live sample of a pass, sorted, over its opaque colour rgb [S, P, 3];
-    one sample at a time. Returns (rgb, counts summed over the samples)."""
-    zero = {key: jnp.int32(0) for key in TRANSPARENT_SUMS + RUNNING_MAXIMA}
-
-    def one(t, carry):
-        def run(c):
-            out, tc = sample_pass(scene, camera, clip, offsets[t], depth[t], c[0][t], inv_k, cfg)
-            return c[0].at[t].set(out), _accumulate(c[1], {key: tc[key] for key in c[1]})
-
-        return jax.lax.cond(live[t], run, lambda c: c, carry)
-
-    return jax.lax.fori_loop(0, offsets.shape[0], one, (rgb, zero))
-
-
 def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Frame:
     """The reference image at k x k samples per pixel; k is traced (int32[]), so every k
     shares one compiled program. Only cfg's width, height, chunk and samples_per_pass are
@@ -212,16 +198,19 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
         with jax.named_scope("shade"):
             rgb, work = _shade_samples(tri >= 0, points_of, lambda p: shade(p, scene),
                                        jnp.zeros((n_s * n_pix, 3), jnp.float32), cfg.chunk)
-        rgb = rgb.reshape(n_s, n_pix, 3)
         new = {"shade_invocations": work.invocations, "lanes": work.lanes,
                "chunks": work.chunks, "fragments": rc["fragments"],
                "work_items": rc["work_items"]}
-        if scene.effects.transparency:
+        if scene.effects.transparency:  # every layer of each sample, sorted, over it
             with jax.named_scope("transparent"):
-                rgb, tc = _transparent(scene, camera, clip, offsets, live,
-                                       vis.depth.reshape(n_s, n_pix), rgb, inv_k, cfg)
-            new.update(tc)
+                rgb, tc = sample_pass(scene, camera, clip, offsets, live, vis.depth.reshape(-1),
+                                      rgb, inv_k, cfg)
+            new.update({key: tc[key] for key in TRANSPARENT_SUMS + RUNNING_MAXIMA})
+            # The layers' dispatch is shading work like the opaque launch: in lanes and chunks.
             new["shade_invocations"] = new["shade_invocations"] + tc["transparent_invocations"]
+            new["lanes"] = new["lanes"] + tc["transparent_lanes"]
+            new["chunks"] = new["chunks"] + tc["transparent_chunks"]
+        rgb = rgb.reshape(n_s, n_pix, 3)
         for t in range(n_s):  # sample by sample, in order: the sum of one sample per pass
             acc = acc + rgb[t]
         covered = jnp.any(tri.reshape(n_s, n_pix) >= 0, axis=0)

@@ -330,30 +330,38 @@ def forward_blend(scene, draw, front, values, image, counts: dict, cfg):
     return out.reshape(h, w, 3), counts
 
 
-# ---------------------------------------------------------------- the reference, per sample
+# ---------------------------------------------------------------- the reference, per pass of samples
 
 
-def sample_pass(scene, camera, clip, offset: Array, opaque_depth: Array, rgb: Array,
-                deriv_scale: Array, cfg):
-    """The exact transparent pass at one sub-sample: ``offset`` int32[2] fixed point (traced),
-    the sample's opaque depth float32[P] and colour float32[P, 3]; texture footprints scaled
-    by ``deriv_scale`` (1/k). Every layer sorted, any number of layers (passes of
-    DEFAULT_LAYERS). Returns (rgb, counts)."""
+def sample_pass(scene, camera, clip, offsets: Array, live: Array, opaque_depth: Array,
+                rgb: Array, deriv_scale: Array, cfg):
+    """The exact transparent pass at S sub-samples at once: ``offsets`` int32[S, 2] fixed point
+    (traced), ``live`` bool[S] (a dead sample lists nothing), the samples' opaque depths
+    float32[S * P] and colours float32[S * P, 3], sample-major; texture footprints scaled by
+    ``deriv_scale`` (1/k). The samples share one fragment list, one shading dispatch and one
+    sort, as S * P pixels of their own; every layer sorted, any number of layers (passes of
+    DEFAULT_LAYERS, counted once for the S samples). Returns (rgb, counts, with the shading
+    dispatch's ``transparent_lanes`` and ``transparent_chunks``)."""
     w, h = cfg.width, cfg.height
+    n_pix, n_s = w * h, offsets.shape[0]
     n_tris = scene.num_triangles
     faces = faces_where(scene, is_transparent(scene, jnp.arange(n_tris)))
-    fr = collect_fragments(clip, faces, w, h, 4 * w * h, False, offset,
-                           default_work_capacity(n_tris, w, h), default_clip_capacity(n_tris))
-    front = in_front(fr, opaque_depth, w * h)
-    off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
+    fr = collect_fragments(clip, faces, w, h, n_s * 4 * n_pix, False, offsets,
+                           default_work_capacity(n_tris, w, h), default_clip_capacity(n_tris),
+                           live=live)
+    front = in_front(fr, opaque_depth, n_s * n_pix)
+    off_px = offsets.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
 
     def points_of(items):
         t, p = fr.tri[items], fr.pixel[items]
-        b, dx, dy = pair_barycentrics(clip, scene.faces, t, p % w, p // w, w, h, off_px)
+        sample, q = p // n_pix, p % n_pix
+        b, dx, dy = pair_barycentrics(clip, scene.faces, t, q % w, q // w, w, h,
+                                      (off_px[sample, 0], off_px[sample, 1]))
         return surface_points(scene, camera, t, b, dx * deriv_scale, dy * deriv_scale)
 
-    layers, work = shade_layers(scene, camera, fr, front, points_of, cfg.chunk or w * h)
+    layers, work = shade_layers(scene, camera, fr, front, points_of, cfg.chunk or n_s * n_pix)
     out, counts = composite(scene, layers, rgb, BlendSettings())
     counts["transparent_invocations"] = work.invocations
+    counts["transparent_lanes"], counts["transparent_chunks"] = work.lanes, work.chunks
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return out, counts

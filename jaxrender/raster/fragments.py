@@ -97,18 +97,33 @@ def fragments_jit(
 
 def collect_fragments(clip, faces, width: int, height: int, capacity: int, cull_backfaces: bool,
                       offset: Array, work_capacity: int, clip_capacity: int,
-                      traversal: str = "auto") -> Fragments:
+                      traversal: str = "auto", live: Array | None = None) -> Fragments:
     """``fragments_jit`` for use inside a program, at a fixed-point sample ``offset`` int32[2]
-    that may be traced (the reference's per-sample loop)."""
+    that may be traced (the reference's per-sample loop). With offsets int32[S, 2] the samples
+    share one traversal and one list: sample s of pixel p is ``pixel`` s * W * H + p, and each
+    sample's fragments keep the order of its own list. ``live`` bool[S]: the samples to list
+    (a dead sample's offset should repeat a live one's, so that it widens no bounding box)."""
+    n_pix = width * height
+    single = offset.ndim == 1
     with jax.enable_x64(True):
         def append(st, c):
             pix, tri, depth, n = st
-            pos = n + jnp.cumsum(c.covered, dtype=jnp.int64) - 1
-            at = jnp.where(c.covered & (pos < capacity), pos, capacity)
-            pix = pix.at[at].set(c.py * width + c.px, mode="drop")
-            tri = tri.at[at].set(c.tri, mode="drop")
-            depth = depth.at[at].set(c.depth, mode="drop")
-            return pix, tri, depth, n + jnp.sum(c.covered, dtype=jnp.int64)
+            covered = c.covered if live is None else c.covered & live[:, None]
+            at_pixel = c.py * width + c.px
+            if not single:  # sample-major, so each sample's items stay in their order
+                at_pixel = at_pixel[None] + (jnp.arange(offset.shape[0], dtype=jnp.int32)
+                                             * n_pix)[:, None]
+                covered, depth_c = covered.reshape(-1), c.depth.reshape(-1)
+                at_pixel = at_pixel.reshape(-1)
+                tri_c = jnp.broadcast_to(c.tri[None], (offset.shape[0],) + c.tri.shape).reshape(-1)
+            else:
+                depth_c, tri_c = c.depth, c.tri
+            pos = n + jnp.cumsum(covered, dtype=jnp.int64) - 1
+            at = jnp.where(covered & (pos < capacity), pos, capacity)
+            pix = pix.at[at].set(at_pixel, mode="drop")
+            tri = tri.at[at].set(tri_c, mode="drop")
+            depth = depth.at[at].set(depth_c, mode="drop")
+            return pix, tri, depth, n + jnp.sum(covered, dtype=jnp.int64)
 
         init = (
             jnp.zeros((capacity,), jnp.int32),

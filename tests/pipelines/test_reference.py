@@ -29,6 +29,7 @@ from jaxrender.scene.builtin import checker_image
 from jaxrender.scene.camera_path import stack
 from jaxrender.scene.scene import build_scene
 from jaxrender.shading import shade, surface_points
+from tests.pipelines.transparent_scenes import THREE, layered_quads
 
 W, H = 48, 32
 _EXACT = 1e-6  # same arithmetic, different program: float32 rounding only
@@ -144,22 +145,30 @@ def test_the_in_place_launch_equals_the_compacted_one(scene_a):
     assert int(in_place.counts["chunks"]) == 3  # 9 samples in passes of 4: 3 launches
 
 
-@pytest.mark.parametrize("alpha", [False, True])
-def test_passes_of_any_size_give_the_same_image(scene_a, alpha):
-    """The samples of a pass share one traversal and one launch; the image and the work that
-    depends on the samples alone are the same bits for any pass size, dead samples (9 in passes
-    of 4 or 8) included; lanes are the passes' launches, whole."""
-    scene = _alpha_scene() if alpha else scene_a
-    k, cam = 3, _camera(0.07)
+@pytest.mark.parametrize("kind", ["opaque", "alpha", "transparent"])
+def test_passes_of_any_size_give_the_same_image(scene_a, kind):
+    """The samples of a pass share one traversal and one launch (and one transparent fragment
+    list, dispatch and sort); the image and the work that depends on the samples alone are the
+    same bits for any pass size, dead samples (9 in passes of 4 or 8) included; lanes are the
+    passes' launches, whole."""
+    scene = {"opaque": scene_a, "alpha": _alpha_scene(),
+             "transparent": layered_quads(THREE, (2, 0, 1))}[kind]
+    k, cam = 3, _camera(0.07) if kind != "transparent" else scene.camera
     frames = {n: render(scene, cam, _cfg(k, samples_per_pass=n)) for n in (1, 4, 8)}
+    sums = ("transparent_invocations", "transparent_fragments", "transparent_bytes",
+            "transparent_layers_max") if kind == "transparent" else ()
     for n in (4, 8):
         np.testing.assert_array_equal(np.asarray(frames[n].image), np.asarray(frames[1].image),
                                       err_msg=f"image: passes of {n} vs one sample a pass")
-        for key in ("shade_invocations", "fragments", "covered_pixels", "samples_per_pixel"):
+        for key in ("shade_invocations", "fragments", "covered_pixels", "samples_per_pixel",
+                    *sums):
             assert int(frames[n].counts[key]) == int(frames[1].counts[key]), (n, key)
         passes = -(-k * k // n)
-        assert int(frames[n].counts["lanes"]) == passes * n * W * H, n
-        assert int(frames[n].counts["chunks"]) == passes, n
+        if kind != "transparent":
+            assert int(frames[n].counts["lanes"]) == passes * n * W * H, n
+            assert int(frames[n].counts["chunks"]) == passes, n
+    for n, frame in frames.items():  # the layers' dispatch counts as shading lanes too
+        assert int(frame.counts["helper_lanes"]) >= 0, (n, int(frame.counts["helper_lanes"]))
     # a pass lists each bounding-box pixel once for all of its samples
     assert int(frames[8].counts["work_items"]) < int(frames[1].counts["work_items"])
     with pytest.raises(ValueError, match="samples_per_pass must be"):

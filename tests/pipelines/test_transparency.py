@@ -15,14 +15,11 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import PipelineOverflow, get_pipeline, make_config
-from tests.pipelines.transparent_scenes import BACKGROUND, layered_quads, over
+from tests.pipelines.transparent_scenes import BACKGROUND, BLUE, THREE, TWO, layered_quads, over
 
 W, H = 32, 18
 MIDDLE = (slice(7, 11), slice(13, 19))  # pixels inside every quad
 TOL = 2e-6  # float32 rounding of a few blends
-RED, GREEN, BLUE = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.1, 0.2, 1.0)
-TWO = [(RED, 0.5, "over", 0.5), (GREEN, 0.5, "over", 0.0)]  # front to back
-THREE = [(RED, 0.4, "over", 0.6), (BLUE, 0.7, "additive", 0.2), (GREEN, 0.6, "over", -0.4)]
 SORTED_PIPELINES = ["forward", "deferred", "visbuffer", "dacs", "checkerboard", "reference"]
 
 

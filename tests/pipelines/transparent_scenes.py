@@ -19,6 +19,12 @@ def quad(z: float, material: int, size=(1.6, 1.6), x=0.0):
     return grid_plane(size, material=material).transformed(trs_matrix((x, 0.0, z), (90, 0, 0)))
 
 
+RED, GREEN, BLUE = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.1, 0.2, 1.0)
+# (albedo, opacity, blend, z) front to back
+TWO = [(RED, 0.5, "over", 0.5), (GREEN, 0.5, "over", 0.0)]
+THREE = [(RED, 0.4, "over", 0.6), (BLUE, 0.7, "additive", 0.2), (GREEN, 0.6, "over", -0.4)]
+
+
 def layered_quads(layers, order=None, *, background=True, name="quads"):
     """layers: (albedo rgb, opacity, blend, z) front to back or in any order; ``order`` the
     submission order (indices into layers; default as given). Returns the scene."""

@@ -66,3 +66,39 @@ def test_each_sample_equals_its_own_traversal(rng, traversal, kind):
     assert int(counts["fragments"]) == int(odd_counts["fragments"]) == fragments
     assert int(counts["clipped"]) == int(want_counts["clipped"])
     assert 0 < int(counts["work_items"]) < items, (int(counts["work_items"]), items)
+
+
+@pytest.mark.parametrize("traversal", ["bbox", "recompute", "gpu"])
+def test_one_fragment_list_for_several_samples(rng, traversal):
+    """Sample s of pixel p is listed as pixel s * W * H + p; each live sample's fragments are
+    its own list's, in its order; a dead sample lists nothing."""
+    from jaxrender.raster.fragments import collect_fragments
+
+    clip, faces = _clipped_scene(rng)
+    offsets = rng.integers(0, 256, (4, 2)).astype(np.int32)
+    offsets[2] = offsets[0]
+    live = np.asarray([True, True, False, True])
+    cap = 64 * W * H
+    run = jax.jit(lambda c, f, o, lv: collect_fragments(
+        c, f, W, H, cap, False, o, 512, 7, traversal, live=lv))
+    c, f = jnp.asarray(clip), jnp.asarray(faces)
+    many = run(c, f, jnp.asarray(offsets), jnp.asarray(live))
+    n = int(many.count)
+    pixel = np.asarray(many.pixel)[:n]
+    total = 0
+    for s in range(4):
+        one = run(c, f, jnp.asarray(offsets[s]), None)
+        mine = pixel // (W * H) == s
+        if not live[s]:
+            assert not mine.any(), f"dead sample {s} listed fragments"
+            continue
+        m = int(one.count)
+        total += m
+        assert m > 0 and int(mine.sum()) == m, (s, m, int(mine.sum()))
+        np.testing.assert_array_equal(pixel[mine] % (W * H), np.asarray(one.pixel)[:m],
+                                      err_msg=f"sample {s}: pixels")
+        for name in ("tri", "depth"):
+            np.testing.assert_array_equal(np.asarray(getattr(many, name))[:n][mine],
+                                          np.asarray(getattr(one, name))[:m],
+                                          err_msg=f"sample {s}: {name}")
+    assert n == total
