@@ -330,7 +330,7 @@ def forward_blend(scene, draw, front, values, image, counts: dict, cfg):
     return out.reshape(h, w, 3), counts
 
 
-# ---------------------------------------------------------------- the reference, per pass of samples
+# ---------------------------------------------------------------- the reference, a pass of samples
 
 
 def sample_pass(scene, camera, clip, offsets: Array, live: Array, opaque_depth: Array,

@@ -259,10 +259,10 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     peel = peel and traversal == "gpu"
     if traversal == "cpu":
         traversal = "bbox" if width * height < SPANS_MIN_PIXELS else "spans"
-    if traversal == "spans" and offset.ndim == 2:
-        traversal = "bbox"  # spans are exact for one sample position only
     elif traversal == "gpu":
         traversal = "recompute" if n_tris * RECOMPUTE_MIN_DENSITY >= width * height else "bbox"
+    if traversal == "spans" and offset.ndim == 2:
+        traversal = "bbox"  # spans are exact for one sample position only
 
     setup = SetupFn(width, height, cull)
     with jax.named_scope("classify"):
@@ -367,12 +367,11 @@ def sample_visibility(clip, faces, width, height, offset, *, cull_backfaces=Fals
 
 def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap,
                    traversal="auto", barycentrics=True) -> VisBuffer | DepthBuffer:
-    def one_sample(offset):  # int64[2] fixed-point offset inside the pixel
-        return sample_visibility(clip, faces, width, height, offset, cull_backfaces=cull,
-                                 work_capacity=capacity, clip_capacity=clip_cap,
-                                 traversal=traversal, barycentrics=barycentrics)
-
+    # Fixed-point offsets inside the pixel: int64[2] for one sample, else int64[S, 2], all
+    # tested in one traversal at each bounding-box pixel.
     offs = jnp.asarray(offsets, jnp.int64)
-    # Several samples: one traversal tests all of them at each bounding-box pixel.
-    vis, counts = one_sample(offs[0] if len(offsets) == 1 else offs)
+    vis, counts = sample_visibility(clip, faces, width, height,
+                                    offs[0] if len(offsets) == 1 else offs, cull_backfaces=cull,
+                                    work_capacity=capacity, clip_capacity=clip_cap,
+                                    traversal=traversal, barycentrics=barycentrics)
     return dataclasses.replace(vis, counts=Counts.pack(counts))
