@@ -247,7 +247,9 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
             t = trans.at[at].get(mode="fill", fill_value=1.0)
             return c + t[:, None] * img
 
-        return jax.lax.fori_loop(0, cap, blend, image)
+        # Unrolled: the pass's layers become one chain of gathers and blends that XLA fuses
+        # into one kernel, not a loop of ``cap`` small launches with a condition each.
+        return jax.lax.fori_loop(0, cap, blend, image, unroll=True)
 
     with jax.named_scope("sorted_blend"):
         image = jax.lax.fori_loop(0, passes, one_pass, background)
