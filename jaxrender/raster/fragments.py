@@ -19,6 +19,7 @@ import jaxrender.raster.samples as sample_patterns
 from jaxrender.raster.checks import check_mesh, check_size
 from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity, traverse
 from jaxrender.raster.setup import SUBPIXEL_BITS
+from jaxrender.raster.work_items import flat_samples
 from jaxrender.types import Array, pytree_dataclass
 
 
@@ -103,21 +104,11 @@ def collect_fragments(clip, faces, width: int, height: int, capacity: int, cull_
     share one traversal and one list: sample s of pixel p is ``pixel`` s * W * H + p, and each
     sample's fragments keep the order of its own list. ``live`` bool[S]: the samples to list
     (a dead sample's offset should repeat a live one's, so that it widens no bounding box)."""
-    n_pix = width * height
-    single = offset.ndim == 1
     with jax.enable_x64(True):
         def append(st, c):
             pix, tri, depth, n = st
-            covered = c.covered if live is None else c.covered & live[:, None]
-            at_pixel = c.py * width + c.px
-            if not single:  # sample-major, so each sample's items stay in their order
-                at_pixel = at_pixel[None] + (jnp.arange(offset.shape[0], dtype=jnp.int32)
-                                             * n_pix)[:, None]
-                covered, depth_c = covered.reshape(-1), c.depth.reshape(-1)
-                at_pixel = at_pixel.reshape(-1)
-                tri_c = jnp.broadcast_to(c.tri[None], (offset.shape[0],) + c.tri.shape).reshape(-1)
-            else:
-                depth_c, tri_c = c.depth, c.tri
+            # Sample-major, so that each sample's entries keep their order.
+            covered, at_pixel, tri_c, depth_c = flat_samples(c, width, height, live)
             pos = n + jnp.cumsum(covered, dtype=jnp.int64) - 1
             at = jnp.where(covered & (pos < capacity), pos, capacity)
             pix = pix.at[at].set(at_pixel, mode="drop")

@@ -20,7 +20,7 @@ import jaxrender.raster.samples as sample_patterns
 from jaxrender.raster.checks import check_mesh, check_size
 from jaxrender.raster.clip import MAX_FAN, classify, clip_triangles
 from jaxrender.raster.coverage import for_each_chunk
-from jaxrender.raster.work_items import EMPTY_KEY, Triangles, depth_key
+from jaxrender.raster.work_items import EMPTY_KEY, Triangles, depth_key, flat_samples
 from jaxrender.raster.resolve import decode_keys, resolve
 from jaxrender.raster.setup import SUBPIXEL_BITS, SetupFn, guard_band
 from jaxrender.scene.camera import Camera, world_to_clip
@@ -326,23 +326,15 @@ def sample_visibility(clip, faces, width, height, offset, *, cull_backfaces=Fals
     with jax.enable_x64(True):
         offset = offset.astype(jnp.int64)
         n_pix = width * height
-        single = offset.ndim == 1
-        n_samples = 1 if single else offset.shape[0]
-
-        def per_sample(x):  # an item's value against a chunk's [S, capacity] values
-            return x if single else jnp.broadcast_to(x[None], (n_samples,) + x.shape)
+        n_samples = 1 if offset.ndim == 1 else offset.shape[0]
 
         def scatter_min(st, c):
             zb, frags = st
-            covered = c.covered if live is None else c.covered & live[:, None]
-            hit = covered if keep is None else covered & keep(c)
-            # Sample s of pixel p is entry s * n_pix + p.
-            pix = per_sample(c.py * width + c.px)
-            if not single:
-                pix = pix + (jnp.arange(n_samples, dtype=pix.dtype) * n_pix)[:, None]
+            covered, pix, tri, depth = flat_samples(c, width, height, live)
+            hit = covered if keep is None else covered & jnp.broadcast_to(
+                keep(c), c.covered.shape).reshape(-1)
             pix = jnp.where(hit, pix, n_samples * n_pix)
-            key = depth_key(c.depth, per_sample(c.tri))
-            zb = zb.at[pix.reshape(-1)].min(key.reshape(-1), mode="drop")
+            zb = zb.at[pix].min(depth_key(depth, tri), mode="drop")
             return zb, frags + jnp.sum(covered, dtype=jnp.int64)
 
         zbuf = jnp.full((n_samples * n_pix,), EMPTY_KEY, jnp.int64)

@@ -136,6 +136,21 @@ def items_from_setup(su: TriSetup, slot: Array, j: Array, live: Array, offset: A
     return WorkChunk(slot, su.tri, px, py, covered, depth)
 
 
+def flat_samples(c: WorkChunk, width: int, height: int, live: Array | None = None):
+    """A chunk's items as one entry per sample, sample-major: (covered, pixel, tri, depth),
+    each [S * capacity] for a chunk of S samples ([capacity] for one), where sample s of pixel
+    p is pixel s * width * height + p. ``live`` bool[S]: a dead sample's entries are never
+    covered."""
+    covered = c.covered if live is None else c.covered & live[:, None]
+    pixel = c.py * width + c.px
+    if c.covered.ndim == 1:
+        return covered, pixel, c.tri, c.depth
+    first = jnp.arange(c.covered.shape[0], dtype=pixel.dtype) * (width * height)
+    pixel = pixel[None] + first[:, None]
+    tri = jnp.broadcast_to(c.tri[None], c.covered.shape)
+    return covered.reshape(-1), pixel.reshape(-1), tri.reshape(-1), c.depth.reshape(-1)
+
+
 def depth_key(depth: Array, tri: Array) -> Array:
     """Pack (depth, id) into one int64 whose minimum is the nearest, lowest-id fragment.
 
