@@ -5,7 +5,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.fusion import all_small, materialize_all, sum_small
+from jaxrender.fusion import all_small, sum_small
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.scene import Scene
 from jaxrender.shading.vec import cross, dot, safe_normalize
@@ -48,8 +48,6 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
     flip = dot(n_geo, view) < 0.0
     sign = jnp.where(flip, jnp.float32(-1.0), jnp.float32(1.0))
     n_geo, n_shade = n_geo * sign, n_shade * sign
-    # Stored: the shader reads these per light and per component, through further normalisations.
-    pos, n_geo, n_shade, view = materialize_all(pos, n_geo, n_shade, view)
     tan_v = scene.tangents[f]
     tangent = jnp.concatenate([_interp(bary, tan_v[:, :, :3]), tan_v[:, 0, 3:4]], axis=-1)
     uv_v = scene.uvs[f]
