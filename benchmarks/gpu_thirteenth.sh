@@ -8,12 +8,13 @@
 #     TREES="after v0" PIPELINES="object_space tads" bash benchmarks/gpu_thirteenth.sh sequence
 #     TREES="after dacs_adds" PIPELINES=dacs SEQ_SCENES="foliage room thin stripes" \
 #       bash benchmarks/gpu_thirteenth.sh sequence
-# The trees of that session: v0 = 9a6cd99 (before); v1 = this shader without its stores;
-# v5 = without the surface point's store; h_store = with the half vector stored too;
+# The trees of that session: v0 = 9a6cd99 (before); v1 = this shader without its stores and
+# v5 = without the surface point's store (both measured on an H200 on 2026-12-05, v5 adopted,
+# their patches removed); h_store = with the half vector stored too;
 # dacs_adds = DACS's per-level decision and interpolation with their short sums as adds
 # (jaxrender/fusion.py; object space's footprint got the same rewrite in the tree itself).
 # shader: bench_shader.py (one screen of surface_points + shade: kernels, launches) for this
-#   checkout ("after") and each of SHADER_TREES (default "v0 v1 v5 h_store").
+#   checkout ("after") and each of SHADER_TREES (default "v0 h_store").
 # sequence: per-frame ms inside a 16-frame pan with --checksum (equal counts, and image sums
 #   within about 1e-5 relative, say the trees rendered the same frames; on the CPU they moved by
 #   4e-6 at most) for each of TREES (default "after v0"); with the default
@@ -23,7 +24,7 @@ root_of() { if [ "$1" = after ]; then echo "$PWD"; else echo "$PWD/.v/$1"; fi; }
 tag() { sed "s/^{/{\"tree\": \"$1\", /"; }
 for part in "$@"; do
   if [ "$part" = shader ]; then
-    for t in after ${SHADER_TREES:-v0 v1 v5 h_store}; do
+    for t in after ${SHADER_TREES:-v0 h_store}; do
       PYTHONPATH=$(root_of "$t"):/tmp/site timeout -k 5 150 python3 benchmarks/bench_shader.py \
         --label "$t" --top 6 --resolution ${RES:-1920x1080} --scenes ${SCENES:-room foliage stripes spheres terrain thin glass} \
         2>&1 | quiet >> "$OUT/shader.md"
