@@ -34,7 +34,7 @@ import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines.registry import REGISTRY, RenderConfig, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
 from jaxrender.pipelines.transparency import sample_pass
-from jaxrender.pipelines.visibility import opaque_faces
+from jaxrender.pipelines.visibility import is_alpha_tested, opaque_faces
 from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
                                         sample_visibility)
 from jaxrender.raster.resolve import barycentrics_at
@@ -90,6 +90,10 @@ class ReferenceConfig(RenderConfig):
 
 # ------------------------------------------------------------------ visibility of one sample
 
+# The alpha test's launch: a quarter of a traversal chunk's lanes (items times samples), which
+# holds the covered samples of a pass's chunk in one or two launches on the built-in scenes.
+ALPHA_CHUNKS = 4
+
 
 def _bary_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, w: int, h: int):
     """Barycentrics and their per-pixel derivatives at window points: the rasterizer's own."""
@@ -108,14 +112,27 @@ def _visibility(scene: Scene, camera: Camera, clip: Array, offsets: Array, live:
     off_px = offsets.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
 
     def alpha_keep(c):  # c.covered: [S, capacity]
-        with jax.enable_x64(False):
-            tri = jnp.where(c.covered, c.tri[None], 0).astype(jnp.int32)
-            x = c.px.astype(jnp.float32)[None] + off_px[:, :1]
-            y = c.py.astype(jnp.float32)[None] + off_px[:, 1:]
-            tri, x, y = tri.reshape(-1), x.reshape(-1), y.reshape(-1)
+        # Only the covered samples of alpha-tested triangles run the test, compacted: a
+        # chunk's lanes are every bounding-box pixel times every sample of the pass, most of
+        # them uncovered, and the test (barycentrics, surface point, a texture fetch) costs
+        # about what shading does.
+        n_s, cap = c.covered.shape
+        tested = (c.covered & is_alpha_tested(scene, c.tri)[None]).reshape(-1)
+
+        def points_of(items):
+            s, i = items // cap, items % cap
+            tri = c.tri[i]
+            x = c.px[i].astype(jnp.float32) + off_px[s, 0]
+            y = c.py[i].astype(jnp.float32) + off_px[s, 1]
             b, bx, by = _bary_at(tri, x, y, clip, faces, w, h)
-            pts = surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
-            return alpha_test(pts, scene).reshape(c.covered.shape)
+            return surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
+
+        with jax.enable_x64(False):
+            passed, _ = dispatch.shade(
+                dispatch.WorkList.of(tested), points_of,
+                lambda pts: alpha_test(pts, scene).astype(jnp.float32),
+                jnp.ones((n_s * cap,), jnp.float32), max(n_s * cap // ALPHA_CHUNKS, 1))
+        return passed.reshape(n_s, cap) > 0.5
 
     vis, counts = sample_visibility(
         clip, opaque_faces(scene), w, h, offsets, work_capacity=default_work_capacity(n_tris, w, h),
