@@ -112,12 +112,12 @@ def _visibility(scene: Scene, camera: Camera, clip: Array, offsets: Array, live:
     off_px = offsets.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
 
     def alpha_keep(c):  # c.covered: [S, capacity]
-        # Only the covered samples of alpha-tested triangles run the test, compacted: a
+        # Only the covered live samples of alpha-tested triangles run the test, compacted: a
         # chunk's lanes are every bounding-box pixel times every sample of the pass, most of
         # them uncovered, and the test (barycentrics, surface point, a texture fetch) costs
         # about what shading does.
         n_s, cap = c.covered.shape
-        tested = (c.covered & is_alpha_tested(scene, c.tri)[None]).reshape(-1)
+        tested = (c.covered & live[:, None] & is_alpha_tested(scene, c.tri)[None]).reshape(-1)
 
         def points_of(items):
             s, i = items // cap, items % cap
@@ -128,11 +128,11 @@ def _visibility(scene: Scene, camera: Camera, clip: Array, offsets: Array, live:
             return surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
 
         with jax.enable_x64(False):
-            passed, _ = dispatch.shade(
+            passed, work = dispatch.shade(
                 dispatch.WorkList.of(tested), points_of,
                 lambda pts: alpha_test(pts, scene).astype(jnp.float32),
                 jnp.ones((n_s * cap,), jnp.float32), max(n_s * cap // ALPHA_CHUNKS, 1))
-        return passed.reshape(n_s, cap) > 0.5
+        return passed.reshape(n_s, cap) > 0.5, work.invocations
 
     vis, counts = sample_visibility(
         clip, opaque_faces(scene), w, h, offsets, work_capacity=default_work_capacity(n_tris, w, h),
@@ -217,7 +217,8 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
                                        jnp.zeros((n_s * n_pix, 3), jnp.float32), cfg.chunk)
         new = {"shade_invocations": work.invocations, "lanes": work.lanes,
                "chunks": work.chunks, "fragments": rc["fragments"],
-               "work_items": rc["work_items"]}
+               "work_items": rc["work_items"],
+               "alpha_invocations": rc.get("keep_tests", jnp.int32(0))}
         if scene.effects.transparency:  # every layer of each sample, sorted, over it
             with jax.named_scope("transparent"):
                 rgb, tc = sample_pass(scene, camera, clip, offsets, live, vis.depth.reshape(-1),
@@ -233,7 +234,7 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
         covered = jnp.any(tri.reshape(n_s, n_pix) >= 0, axis=0)
         return acc, any_cov | covered, _accumulate(counts, new)
 
-    keys = ("shade_invocations", "lanes", "chunks", "fragments", "work_items")
+    keys = ("shade_invocations", "lanes", "chunks", "fragments", "work_items", "alpha_invocations")
     if scene.effects.transparency:
         keys = keys + TRANSPARENT_SUMS + RUNNING_MAXIMA
     counts0 = {key: jnp.int32(0) for key in keys}

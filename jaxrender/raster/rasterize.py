@@ -318,29 +318,33 @@ def sample_visibility(clip, faces, width, height, offset, *, cull_backfaces=Fals
     each sample's buffer is the one it gets alone, bit for bit, with a leading S axis on every
     field. ``live``: bool[S], the samples to keep (a dead sample covers nothing and counts no
     fragment; its offset should be a live one's, so that it widens no box). ``keep``: an
-    optional ``keep(chunk) -> bool[capacity]`` (bool[S, capacity]) that discards covered
-    fragments before the depth test (a per-sample alpha test); discarded fragments still
-    count in ``fragments``. Returns (VisBuffer, or DepthBuffer without ``barycentrics``, with
-    empty counts; counts dict of int64: work_items (bounding-box pixels, each testing every
-    sample), clipped, dropped_nonfinite, fragments)."""
+    optional ``keep(chunk) -> (bool[capacity] (or bool[S, capacity]), int tests run)`` that
+    discards covered fragments before the depth test (a per-sample alpha test); discarded
+    fragments still count in ``fragments``, and the tests it says it ran in ``keep_tests``.
+    Returns (VisBuffer, or DepthBuffer without ``barycentrics``, with empty counts; counts dict
+    of int64: work_items (bounding-box pixels, each testing every sample), clipped,
+    dropped_nonfinite, fragments, and keep_tests with ``keep``)."""
     with jax.enable_x64(True):
         offset = offset.astype(jnp.int64)
         n_pix = width * height
         n_samples = 1 if offset.ndim == 1 else offset.shape[0]
 
         def scatter_min(st, c):
-            zb, frags = st
+            zb, frags, tests = st
             covered, pix, tri, depth = flat_samples(c, width, height, live)
-            hit = covered if keep is None else covered & jnp.broadcast_to(
-                keep(c), c.covered.shape).reshape(-1)
+            hit = covered
+            if keep is not None:
+                kept, ran = keep(c)
+                hit = covered & jnp.broadcast_to(kept, c.covered.shape).reshape(-1)
+                tests = tests + ran.astype(jnp.int64)
             pix = jnp.where(hit, pix, n_samples * n_pix)
             zb = zb.at[pix].min(depth_key(depth, tri), mode="drop")
-            return zb, frags + jnp.sum(covered, dtype=jnp.int64)
+            return zb, frags + jnp.sum(covered, dtype=jnp.int64), tests
 
         zbuf = jnp.full((n_samples * n_pix,), EMPTY_KEY, jnp.int64)
-        (zbuf, frags), counts = traverse(
+        (zbuf, frags, tests), counts = traverse(
             clip, faces, width, height, cull_backfaces, offset, work_capacity, clip_capacity,
-            (zbuf, jnp.int64(0)), scatter_min, traversal,
+            (zbuf, jnp.int64(0), jnp.int64(0)), scatter_min, traversal,
         )
         with jax.named_scope("resolve"):
             off_px = offset.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
@@ -354,7 +358,10 @@ def sample_visibility(clip, faces, width, height, offset, *, cull_backfaces=Fals
                 vis = one(zbuf, off_px)
             else:
                 vis = jax.vmap(one)(zbuf.reshape(n_samples, n_pix), off_px)
-        return vis, dict(counts, fragments=frags)
+        counts = dict(counts, fragments=frags)
+        if keep is not None:
+            counts["keep_tests"] = tests
+        return vis, counts
 
 
 def _rasterize_x64(clip, faces, width, height, cull, offsets, capacity, clip_cap,

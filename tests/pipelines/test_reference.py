@@ -20,7 +20,7 @@ from jaxrender.pipelines.reference import (
     convergence_psnr,
     render,
 )
-from jaxrender.raster import rasterize
+from jaxrender.raster import fragments, rasterize
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.raster.resolve import barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
@@ -231,6 +231,26 @@ def _alpha_scene():
             Material("red", albedo=(0.8, 0.1, 0.1))]
     return build_scene([front, back], mats, [tex], make_lights([((0, 0, 1), np.pi)]),
                        _camera(), name="alpha_test")
+
+
+def test_alpha_test_runs_on_covered_samples_of_tested_triangles_only(scene_a):
+    """Skipped work stays skipped: the alpha test runs once per covered sample of an
+    alpha-tested triangle (the front quad, triangles 0 and 1), counted off its launches, not
+    on the pass's bounding-box pixels times its samples; a scene without the test runs none."""
+    scene, cam, k = _alpha_scene(), _camera(0.07), 3
+    frames = {n: render(scene, cam, _cfg(k, samples_per_pass=n)) for n in (1, 4)}
+    clip = world_to_clip(scene.positions, cam, W / H)
+    offsets = sample_patterns.stratified(k)
+    want = 0
+    for off in offsets:  # the fragment list of each sample, on its own
+        fr = fragments(clip, scene.faces, W, H, sample_offset=tuple(off))
+        tri = np.asarray(fr.tri)[np.asarray(fr.valid)]
+        want += int(np.sum(np.isin(tri, (0, 1))))
+    assert want > 0
+    for n, frame in frames.items():
+        assert int(frame.counts["alpha_invocations"]) == want, n
+        assert want < int(frame.counts["work_items"]) * min(n, k * k), n
+    assert int(render(scene_a, cam, _cfg(2)).counts["alpha_invocations"]) == 0
 
 
 def test_alpha_test_discards_before_the_depth_test():

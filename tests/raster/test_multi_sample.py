@@ -30,8 +30,8 @@ def test_each_sample_equals_its_own_traversal(rng, traversal, kind):
     live = np.ones(n, bool)
     live[rng.integers(n)] = False
     offsets[~live] = offsets[live][0]  # a dead sample repeats a live one's offset
-    keep_odd = lambda chunk: chunk.tri % 2 == 1  # noqa: E731
-    keep_odd_many = lambda chunk: (chunk.tri % 2 == 1)[None]  # noqa: E731
+    keep_odd = lambda chunk: (chunk.tri % 2 == 1, jnp.sum(chunk.covered))  # noqa: E731
+    keep_odd_many = lambda chunk: ((chunk.tri % 2 == 1)[None], jnp.sum(chunk.covered))  # noqa: E731
     kw = dict(work_capacity=512, clip_capacity=7, traversal=traversal)
 
     @jax.jit

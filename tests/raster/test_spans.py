@@ -133,7 +133,7 @@ def test_sample_visibility_is_the_rasterizers_per_sample_core(rng):
 
     @jax.jit
     def run(c, f):
-        keep_odd = lambda chunk: chunk.tri % 2 == 1  # noqa: E731
+        keep_odd = lambda chunk: (chunk.tri % 2 == 1, jnp.sum(chunk.covered))  # noqa: E731
         args = (c, f, W, H, jnp.asarray(offset))
         kw = dict(work_capacity=1 << 16, clip_capacity=64, traversal="bbox")
         return sample_visibility(*args, **kw), sample_visibility(*args, keep=keep_odd, **kw)
@@ -146,3 +146,5 @@ def test_sample_visibility_is_the_rasterizers_per_sample_core(rng):
     tri = np.asarray(odd.tri_id)
     assert np.all((tri == -1) | (tri % 2 == 1)) and np.any(tri >= 0)
     assert int(odd_counts["fragments"]) == int(counts["fragments"])  # counted before the test
+    assert int(odd_counts["keep_tests"]) == int(counts["fragments"]), "tests keep said it ran"
+    assert "keep_tests" not in counts
