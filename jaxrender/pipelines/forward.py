@@ -1,9 +1,11 @@
 """Forward shading: triangles drawn in submission order, each fragment shaded if it passes the
 depth test at the moment it is drawn.
 
-The draw is replayed from the fragment list: fragments sorted by (sample, pixel, triangle) are
-the per-pixel draw order, and a segmented running minimum of the depth written so far decides
-which pass (GL_LESS). With ``z_prepass`` a depth-only pass first fills the depth buffer
+The draw is replayed from the fragment list: sorted so that each pixel's fragments are in
+triangle (submission) order, and a segmented running minimum of the depth written so far decides
+which pass (GL_LESS). One sample sorts by (2x2 quad, triangle, lane): each pixel's fragments
+in order, and the units of one (triangle, quad) together, which counts the quads without a
+second sort; several samples sort by (sample, pixel, triangle). With ``z_prepass`` a depth-only pass first fills the depth buffer
 (honouring the alpha test), then only fragments at exactly that depth are shaded (GL_EQUAL):
 one shade per visible pixel, while the 2x2 quads still launch helper lanes. Under MSAA the
 depth test runs per sample and the shader once per (pixel, triangle) with any sample passing,
@@ -25,7 +27,8 @@ from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_over
 from jaxrender.pipelines.dispatch import dispatch_lanes
 from jaxrender.pipelines.draw_waves import draw_waves
 from jaxrender.pipelines.micro_batch import triangle_batches
-from jaxrender.pipelines.quads import (BIG, exclusive_segmented_cummin, first_of_segment_index,
+from jaxrender.pipelines.quads import (BIG, exclusive_lane_cummin, exclusive_segmented_cummin,
+                                       first_of_segment_index, first_units_of_quads, quad_keys,
                                        quad_list, segment_starts)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
@@ -69,10 +72,13 @@ class ForwardConfig(BlendingConfig):
 
 
 class DrawList(NamedTuple):
-    """The fragments of every sample in draw order: sorted by (sample, pixel, triangle), empty
-    entries last. ``seg`` marks each (sample, pixel)'s first fragment, ``slot`` is the fragment's
-    (sample, pixel) (S * P when empty), ``unit`` the fragment that represents its (triangle,
-    pixel) shading unit (under MSAA several samples share one), ``samples`` the sample count."""
+    """The fragments of every sample in draw order, empty entries last: sorted by (sample,
+    pixel, triangle), ``seg`` marking each (sample, pixel)'s first fragment; or, with ``lane``
+    (one sample), by (2x2 quad, triangle, lane), ``seg`` marking each quad's first fragment and
+    ``lane`` the pixel's place in its quad (each pixel's fragments still in triangle order,
+    interleaved with its quad's other pixels'). ``slot`` is the fragment's (sample, pixel)
+    (S * P when empty), ``unit`` the fragment that represents its (triangle, pixel) shading
+    unit (under MSAA several samples share one), ``samples`` the sample count."""
 
     skey: Array
     pixel: Array
@@ -85,6 +91,7 @@ class DrawList(NamedTuple):
     overflow: Array
     fragments: Array
     samples: int = 1
+    lane: Array | None = None
 
 
 def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
@@ -93,7 +100,7 @@ def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
                               sample_offset=o) for o in offsets]
     n_pix, n_tris = cfg.width * cfg.height, scene.faces.shape[0]
     if len(lists) == 1:
-        return single_sample_draw_list(lists[0], n_pix, n_tris)
+        return single_sample_draw_list(lists[0], cfg.width, cfg.height, n_tris)
     return sorted_draw_list(lists, n_pix, n_tris)
 
 
@@ -116,21 +123,35 @@ def sorted_draw_list(lists, n_pix: int, n_tris: int) -> DrawList:
     return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit, overflow, n_fragments, n_s)
 
 
-def single_sample_draw_list(fr, n_pix: int, n_tris: int) -> DrawList:
-    """``sorted_draw_list`` of one sample's list: its fragments are a prefix of the list, so
-    only that prefix is sorted (``lex_sort_prefix``), on pixel then triangle alone."""
+def single_sample_draw_list(fr, width: int, height: int, n_tris: int) -> DrawList:
+    """The DrawList of one sample's fragment list, quad-major: sorted by (2x2 quad, triangle,
+    lane), so that the units of one (triangle, quad) lie together and the quads are counted
+    without a second sort (``quads.first_units_of_quads``). Its fragments are a prefix of the
+    list, so only that prefix is sorted (``lex_sort_prefix``)."""
+    n_pix, qw = width * height, (width + 1) // 2
     live = jnp.minimum(fr.count, fr.pixel.shape[0])
-    (pixel, tri), (depth,) = lex_sort_prefix(
-        (jnp.where(fr.valid, fr.pixel, -1), jnp.where(fr.valid, fr.tri, -1)),
-        (n_pix - 1, n_tris - 1), (fr.depth,), live)
-    valid = pixel != EMPTY
-    pixel = jnp.where(valid, pixel, 0)
+    quad, lane = quad_keys(jnp.where(fr.valid, fr.pixel, 0), width)
+    n_quads = qw * ((height + 1) // 2)
+    keys = [jnp.where(fr.valid, k, -1) for k in (quad, fr.tri, lane)]
+    (quad, tri, lane), (depth,) = lex_sort_prefix(keys, (n_quads - 1, n_tris - 1, 3),
+                                                  (fr.depth,), live)
+    valid = quad != EMPTY
+    quad, lane = jnp.where(valid, quad, 0), jnp.where(valid, lane, 0)
+    pixel = (2 * (quad // qw) + lane // 2) * width + 2 * (quad % qw) + lane % 2
     skey = jnp.where(valid, 0, 1)
-    seg = segment_starts(skey, pixel)
+    seg = segment_starts(skey, quad)
     slot = jnp.where(valid, pixel, n_pix)
     unit = jnp.arange(tri.shape[0], dtype=jnp.int32)
     return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit,
-                    fr.overflowed.astype(jnp.int32), fr.count, 1)
+                    fr.overflowed.astype(jnp.int32), fr.count, 1, lane)
+
+
+def pixel_exclusive_cummin(draw: DrawList, values: Array) -> Array:
+    """float32[F]: the minimum of the values of the earlier fragments of the same (sample,
+    pixel), +inf for its first: what a depth buffer held when the fragment was drawn."""
+    if draw.lane is None:
+        return exclusive_segmented_cummin(values, draw.seg)
+    return exclusive_lane_cummin(values, draw.seg, draw.lane)
 
 
 def _units(tri, pixel, valid, n_s: int, n_tris: int, n_pix: int) -> Array:
@@ -162,7 +183,7 @@ def alpha_pass(scene, draw: DrawList, unit_points, cfg) -> tuple[Array, Array]:
     if not scene.effects.alpha_test:
         return valid, jnp.int32(0)
     tested = is_alpha_tested(scene, draw.tri) & valid
-    z_opaque = exclusive_segmented_cummin(jnp.where(valid & ~tested, draw.depth, INF), draw.seg)
+    z_opaque = pixel_exclusive_cummin(draw, jnp.where(valid & ~tested, draw.depth, INF))
     need = _any_per_unit(draw, tested & (draw.depth < z_opaque))
     keep_u, work = dispatch.shade(
         dispatch.WorkList.of(need), unit_points,
@@ -181,7 +202,7 @@ def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
     if cfg.z_prepass:
         shaded = draw.valid & (draw.depth == z_final)  # GL_EQUAL against the pre-pass depth
     else:
-        shaded = draw.valid & (draw.depth < exclusive_segmented_cummin(zk, draw.seg))  # GL_LESS
+        shaded = draw.valid & (draw.depth < pixel_exclusive_cummin(draw, zk))  # GL_LESS
     shade_unit = _any_per_unit(draw, shaded)
     writer = shaded & keep
     order = jnp.arange(draw.tri.shape[0], dtype=jnp.int32)
@@ -211,8 +232,13 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
         if blended is not None:  # shaded in the main pass, blended after it
             shade_unit = shade_unit | blended
     with jax.named_scope("quads"):
-        ql = quad_list(draw.tri, draw.pixel, shade_unit, cfg.width, cfg.height,
-                       scene.faces.shape[0], live=draw.fragments if n_s == 1 else None)
+        if cfg.shade_helpers or draw.lane is None:  # the helper lanes need the quads listed
+            ql = quad_list(draw.tri, draw.pixel, shade_unit, cfg.width, cfg.height,
+                           scene.faces.shape[0], live=draw.fragments if n_s == 1 else None)
+            quads = (ql["start"], ql["tri"], ql["n_quads"])
+        else:
+            first = first_units_of_quads(draw.tri, draw.seg, shade_unit)
+            quads = (first, draw.tri, jnp.sum(first, dtype=jnp.int32))
     with jax.named_scope("shade"):
         colours = jnp.zeros((draw.tri.shape[0], 3), jnp.float32)
         if cfg.shade_helpers:
@@ -224,7 +250,7 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
     with jax.named_scope("resolve"):
         image, covered = resolve_samples(colours[:, :3], draw, win, n_s, cfg)
     with jax.named_scope("counts"):
-        counts = _counts(scene, draw, ql, work.invocations, covered, alpha_invocations, cfg)
+        counts = _counts(scene, draw, quads, work.invocations, covered, alpha_invocations, cfg)
         # The pre-pass transforms every vertex again (positions only).
         counts.update(vertex_counts(scene, full_passes=1, position_passes=int(cfg.z_prepass)))
     image, counts = forward_blend(scene, draw, blended, colours, image, counts, cfg)
@@ -257,16 +283,18 @@ def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
     return image, covered
 
 
-def _counts(scene, draw: DrawList, ql, invocations, covered, alpha_invocations, cfg) -> dict:
-    """Waves: the quads of one draw, in rasterization order (``draw_waves``)."""
-    lanes = ql["n_quads"] * 4
+def _counts(scene, draw: DrawList, quads, invocations, covered, alpha_invocations, cfg) -> dict:
+    """``quads``: (bool[N] one unit of each quad marked, int32[N] its triangle, quad count).
+    Waves: the quads of one draw, in rasterization order (``draw_waves``)."""
+    quad_start, quad_tri, n_quads = quads
+    lanes = n_quads * 4
     return make_counts(
         shade_invocations=invocations,
         helper_lanes=lanes - invocations,
         covered_pixels=covered,
-        **draw_waves(triangle_batches(scene.tri_object, scene.tri_material), ql, cfg.wave_size,
-                     invocations),
-        quads=ql["n_quads"],
+        **draw_waves(triangle_batches(scene.tri_object, scene.tri_material), quad_start,
+                     quad_tri, cfg.wave_size, invocations),
+        quads=n_quads,
         # The shader's live lanes: the shaded units, plus the helper lanes when they run.
         shader_evaluations=lanes if cfg.shade_helpers else invocations,
         fragments=draw.fragments,

@@ -28,7 +28,8 @@ def segment_starts(*keys: Array) -> Array:
 
 
 def segmented_cummin(values: Array, start: Array) -> Array:
-    """Inclusive running minimum of float32[N] restarting where ``start`` is True: a packed-key
+    """Inclusive running minimum of float32[N] (or of each column of float32[N, K]) restarting
+    where ``start`` bool[N] is True: a packed-key
     cummin on a GPU (a reduce-window there, about ten times faster than the scan over (flag,
     value) pairs at 8M entries), the associative scan on a CPU (where a reduce-window is
     slower). The choice is made when the program is lowered for a platform."""
@@ -44,7 +45,8 @@ def scan_segmented_cummin(values: Array, start: Array) -> Array:
         fb, vb = b
         return fa | fb, jnp.where(fb, vb, jnp.minimum(va, vb))
 
-    _, out = jax.lax.associative_scan(comb, (start, values))
+    flags = start.reshape((-1,) + (1,) * (values.ndim - 1))
+    _, out = jax.lax.associative_scan(comb, (flags, values))
     return out
 
 
@@ -58,17 +60,29 @@ def packed_segmented_cummin(values: Array, start: Array) -> Array:
         bits = jax.lax.bitcast_convert_type(values.astype(jnp.float32), jnp.int32)
         ordered = jnp.where(bits >= 0, bits, bits ^ 0x7FFFFFFF).astype(jnp.int64) + (1 << 31)
         segment = jnp.cumsum(start, dtype=jnp.int64) - 1
-        key = jax.lax.cummin(((n - segment) << 32) | ordered)
+        segment = segment.reshape((-1,) + (1,) * (values.ndim - 1))
+        key = jax.lax.cummin(((n - segment) << 32) | ordered, axis=0)
         low = ((key & 0xFFFFFFFF) - (1 << 31)).astype(jnp.int32)
         back = jnp.where(low >= 0, low, low ^ 0x7FFFFFFF)
         return jax.lax.bitcast_convert_type(back, jnp.float32)
 
 
 def exclusive_segmented_cummin(values: Array, start: Array) -> Array:
-    """Minimum of the earlier entries of the same segment (+inf for a segment's first)."""
+    """Minimum of the earlier entries of the same segment (+inf for a segment's first);
+    values float32[N] or float32[N, K] (K columns, one segmentation)."""
     incl = segmented_cummin(values, start)
-    prev = jnp.concatenate([jnp.full((1,), jnp.inf, values.dtype), incl[:-1]])
-    return jnp.where(start, jnp.inf, prev)
+    prev = jnp.concatenate([jnp.full((1,) + values.shape[1:], jnp.inf, values.dtype), incl[:-1]])
+    return jnp.where(start.reshape((-1,) + (1,) * (values.ndim - 1)), jnp.inf, prev)
+
+
+def exclusive_lane_cummin(values: Array, start: Array, lane: Array) -> Array:
+    """Minimum of the earlier entries of the same segment and the same lane (0..3): the
+    per-pixel running minimum of a list grouped by 2x2 quad (``start``) whose pixels'
+    entries interleave inside their quad; one scan of four columns."""
+    lanes = jnp.arange(4, dtype=lane.dtype)
+    cols = jnp.where(lane[:, None] == lanes[None, :], values[:, None], jnp.inf)
+    excl = exclusive_segmented_cummin(cols, start)
+    return jnp.take_along_axis(excl, jnp.clip(lane, 0, 3)[:, None], axis=1)[:, 0]
 
 
 def first_of_segment_index(start: Array) -> Array:
@@ -82,6 +96,15 @@ def quad_keys(pixel: Array, width: int) -> tuple[Array, Array]:
     x, y = pixel % width, pixel // width
     qw = (width + 1) // 2
     return (y // 2) * qw + x // 2, (y % 2) * 2 + x % 2
+
+
+def first_units_of_quads(tri: Array, quad_start: Array, shaded: Array) -> Array:
+    """bool[N]: the first shaded unit of each (triangle, quad) of a list ordered by quad, then
+    triangle (``quad_start``: True at each quad's first entry): a quad's units of one triangle
+    lie together there, so the quads are counted without sorting the units again."""
+    group = quad_start | jnp.concatenate([jnp.ones((1,), bool), tri[1:] != tri[:-1]])
+    before = jnp.cumsum(shaded, dtype=jnp.int32) - shaded.astype(jnp.int32)  # shaded before
+    return shaded & (before == before[first_of_segment_index(group)])
 
 
 def quad_list(tri: Array, pixel: Array, shaded: Array, width: int, height: int, n_tris: int,

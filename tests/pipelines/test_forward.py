@@ -95,26 +95,57 @@ def test_config_rejects_bad_values():
 
 
 @pytest.mark.parametrize("filled", [0.05, 0.3, 0.9])
-def test_the_single_sample_draw_list_equals_the_general_sort(filled):
-    # One sample sorts only the filled prefix of its list; the general path sorts all of it.
-    from jaxrender.pipelines.forward import single_sample_draw_list, sorted_draw_list
+def test_the_single_sample_draw_list_is_quad_major_and_in_draw_order(filled):
+    # One sample sorts only the filled prefix of its list, by (2x2 quad, triangle, lane); the
+    # oracle is NumPy's lexsort of the same fragments.
+    from jaxrender.pipelines.forward import single_sample_draw_list
     from jaxrender.raster.fragments import Fragments
 
     rng = np.random.default_rng(int(filled * 100))
-    cap, n_pix, n_tris = 4000, 900, 300
+    cap, w, h, n_tris = 4000, 31, 29, 300  # odd sides: quads at the edges are partial
     n = int(cap * filled)
     valid = np.arange(cap) < n
-    pixel = np.where(valid, rng.integers(0, n_pix, cap), 0).astype(np.int32)
-    tri = np.where(valid, rng.integers(0, n_tris, cap), -1).astype(np.int32)
+    # Unique (pixel, triangle) pairs, as a fragment list of one sample holds.
+    pairs = rng.choice(w * h * n_tris, n, replace=False)
+    pixel = np.zeros(cap, np.int32)
+    tri = np.full(cap, -1, np.int32)
+    pixel[:n], tri[:n] = pairs // n_tris, pairs % n_tris
     depth = np.where(valid, rng.random(cap), 1.0).astype(np.float32)
     fr = Fragments(*(jax.numpy.asarray(a) for a in (pixel, tri, depth, valid)),
                    jax.numpy.int32(n))
-    got = single_sample_draw_list(fr, n_pix, n_tris)
-    want = sorted_draw_list([fr], n_pix, n_tris)
-    for field in want._fields:
-        np.testing.assert_array_equal(np.asarray(getattr(got, field)),
-                                      np.asarray(getattr(want, field)),
-                                      err_msg=f"{field} at {filled:.0%} filled")
+    got = single_sample_draw_list(fr, w, h, n_tris)
+    x, y = pixel[:n] % w, pixel[:n] // w
+    quad, lane = (y // 2) * ((w + 1) // 2) + x // 2, (y % 2) * 2 + x % 2
+    order = np.lexsort((lane, tri[:n], quad))
+    np.testing.assert_array_equal(np.asarray(got.pixel)[:n], pixel[order], err_msg="pixel")
+    np.testing.assert_array_equal(np.asarray(got.tri)[:n], tri[order], err_msg="tri")
+    np.testing.assert_array_equal(np.asarray(got.depth)[:n], depth[order], err_msg="depth")
+    np.testing.assert_array_equal(np.asarray(got.lane)[:n], lane[order], err_msg="lane")
+    np.testing.assert_array_equal(np.asarray(got.valid), valid, err_msg="valid")
+    np.testing.assert_array_equal(np.asarray(got.slot), np.where(valid, got.pixel, w * h))
+    starts = np.concatenate([[True], quad[order][1:] != quad[order][:-1]])
+    np.testing.assert_array_equal(np.asarray(got.seg)[:n], starts, err_msg="seg")
+
+
+def test_the_per_pixel_minimum_of_a_quad_major_list():
+    # Each pixel's running minimum over its own earlier fragments, its quad's other pixels'
+    # interleaved: against a loop over the entries.
+    from jaxrender.pipelines.quads import exclusive_lane_cummin
+
+    rng = np.random.default_rng(7)
+    n = 500
+    quad = np.sort(rng.integers(0, 40, n))
+    lane = rng.integers(0, 4, n)
+    values = rng.random(n).astype(np.float32)
+    start = np.concatenate([[True], quad[1:] != quad[:-1]])
+    want = np.full(n, np.inf, np.float32)
+    seen = {}
+    for i in range(n):
+        want[i] = seen.get((quad[i], lane[i]), np.inf)
+        seen[(quad[i], lane[i])] = min(want[i], values[i])
+    got = exclusive_lane_cummin(jax.numpy.asarray(values), jax.numpy.asarray(start),
+                                jax.numpy.asarray(lane, jax.numpy.int32))
+    np.testing.assert_array_equal(np.asarray(got), want, err_msg="per-pixel exclusive minimum")
 
 
 @pytest.mark.parametrize("filled", [0.1, 0.6])
