@@ -1,15 +1,20 @@
 #!/usr/bin/env bash
 # Fifteenth session, one device call per line below (carry .whl and .v; build .v with
-# benchmarks/variants/prepare.sh first):
-#   bash benchmarks/gpu_fifteenth.sh profile reference
-#   bash benchmarks/gpu_fifteenth.sh glass msaa
-# profile: kernel profiles of what is still over issue 23's 3 ms (room's deferred and forward,
-#   thin's forward, glass's deferred), named scopes summed, device copies named; output
-#   $OUT/profile.md; and foliage's reference, where passes of 8 gained 4%.
-# reference: the 64-sample reference inside a 2-frame pan (median of 3) for this checkout
-#   ("after": the alpha test of the covered samples only, compacted) against v14 (07b2d0c),
-#   and with its shading compacted into launches of half a pass (chunk = 8 x 1920 x 1080 / 2)
-#   against in place. --checksum: image sums and invocations must agree.
+# benchmarks/variants/prepare.sh first; v14 = 07b2d0c, the tree before this session):
+#   bash benchmarks/gpu_fifteenth.sh forward reference profile     (about 8 minutes)
+#   bash benchmarks/gpu_fifteenth.sh glass msaa profile_b
+# forward: forward (one sort: the draw list by quad, triangle, lane; no quad sort) and
+#   deferred (unchanged, the control) on room, foliage, thin and terrain, 16-frame pans,
+#   this checkout ("after") against v14, --checksum (image sums and invocations must agree).
+#   Prediction: forward 0.3-0.5 ms a frame faster (the eleventh session's profile had two
+#   radix sorts at 0.97 ms, forward's largest cost; one is gone), deferred unchanged.
+# reference: the 64-sample reference inside a 2-frame pan (median of 3) for "after" (the
+#   alpha test of the covered live samples only, compacted) against v14 on foliage, and with
+#   its shading compacted into launches of half a pass (chunk = 8 x 1920 x 1080 / 2) against
+#   in place. Prediction: foliage 62 -> 40-50 ms (the alpha test ran on a whole traversal
+#   chunk of 4.2M items times 8 samples, about 3x the covered samples).
+# profile: kernels of forward on room and of foliage's reference (after), named scopes summed.
+# profile_b: deferred on room and on glass (copies named).
 # glass: every pipeline on glass (16-frame pan), deferred and forward with larger shading
 #   chunks (the transparent pass's dispatch runs ~16 chunks of 2^18 lanes a screen, each a
 #   loop iteration that reads its condition back) and with JAXRENDER_DISPATCH=switch, and
@@ -21,21 +26,29 @@ P() { echo "### $*" >> "$OUT/profile.md"
         2>&1 | quiet >> "$OUT/profile.md"; }
 for part in "$@"; do
   if [ "$part" = profile ]; then
-    SH="--scope shade --scope shadow_pass --scope shadow_lookup --scope lights --scope texture"
-    P deferred --scene room --top 14 --calls 3 --scope visibility --scope gbuffer --scope resolve $SH
     P forward --scene room --top 14 --calls 3 --scope fragments --scope depth_test --scope quads \
-      --scope resolve --scope counts $SH
-    P forward --scene thin --top 12 --calls 3 --scope fragments --scope depth_test --scope quads \
-      --scope resolve --scope counts --scope shade
-    P deferred --scene glass --top 16 --calls 3 --copies --scope visibility --scope transparent \
-      --scope sorted_blend --scope shade --scope fragments
+      --scope shade --scope resolve --scope counts
     P reference --scene foliage --top 14 --calls 2 --scope raster --scope alpha \
       --scope surface_points --scope texture --scope shade --scope reconstruct
     grep -h "^## \|^scope" "$OUT/profile.md"
+  elif [ "$part" = profile_b ]; then
+    SH="--scope shade --scope shadow_pass --scope shadow_lookup --scope lights --scope texture"
+    P deferred --scene room --top 14 --calls 3 --scope visibility --scope gbuffer --scope resolve $SH
+    P deferred --scene glass --top 16 --calls 3 --copies --scope visibility --scope transparent \
+      --scope sorted_blend --scope shade --scope fragments
+    grep -h "^## \|^scope" "$OUT/profile.md"
+  elif [ "$part" = forward ]; then
+    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+    F="--frames 16 --rounds 5 --scenes room foliage thin terrain --pipelines forward deferred"
+    for t in after v14; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 150 $S $F 2>&1 | quiet | grep '^{' \
+        | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/forward.jsonl"
+    done
   elif [ "$part" = reference ]; then
     S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
     R="--frames 2 --rounds 3 --pipelines reference reference:chunk=8294400"
-    PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 $S $R --scenes foliage stripes room 2>&1 | quiet \
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 $S $R --scenes foliage room 2>&1 | quiet \
       | grep '^{' | sed 's/^{/{"tree": "after", /' | tee -a "$OUT/reference.jsonl"
     PYTHONPATH=$PWD/.v/v14:/tmp/site timeout -k 5 100 $S --frames 2 --rounds 3 --scenes foliage \
       --pipelines reference 2>&1 | quiet | grep '^{' | sed 's/^{/{"tree": "v14", /' \
