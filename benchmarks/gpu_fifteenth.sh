@@ -1,18 +1,18 @@
 #!/usr/bin/env bash
 # Fifteenth session, one device call per line below (carry .whl and .v; build .v with
 # benchmarks/variants/prepare.sh first; v14 = 07b2d0c, the tree before this session):
-#   bash benchmarks/gpu_fifteenth.sh forward reference profile     (about 8 minutes)
-#   bash benchmarks/gpu_fifteenth.sh glass msaa profile_b
+#   bash benchmarks/gpu_fifteenth.sh forward reference profile     (ran 2026-12-05)
+#   bash benchmarks/gpu_fifteenth.sh reference glass profile_b     (about 7 minutes)
 # forward: forward (one sort: the draw list by quad, triangle, lane; no quad sort) and
 #   deferred (unchanged, the control) on room, foliage, thin and terrain, 16-frame pans,
 #   this checkout ("after") against v14, --checksum (image sums and invocations must agree).
 #   Prediction: forward 0.3-0.5 ms a frame faster (the eleventh session's profile had two
 #   radix sorts at 0.97 ms, forward's largest cost; one is gone), deferred unchanged.
-# reference: the 64-sample reference inside a 2-frame pan (median of 3) for "after" (the
-#   alpha test of the covered live samples only, compacted) against v14 on foliage, and with
-#   its shading compacted into launches of half a pass (chunk = 8 x 1920 x 1080 / 2) against
-#   in place. Prediction: foliage 62 -> 40-50 ms (the alpha test ran on a whole traversal
-#   chunk of 4.2M items times 8 samples, about 3x the covered samples).
+# reference: the 64-sample reference inside a 2-frame pan (median of 3) for "after" against
+#   v14 on REF_SCENES. The first call (2026-12-05) ran foliage and room with the alpha test
+#   compacted, in place and with chunk = 8 x 1920 x 1080 / 2; "after" now launches each pass
+#   once, compacted into half its lanes when at most half its samples are covered
+#   (dispatch.shade_dense). Prediction: foliage about 34 ms (the chunked row), room as in place.
 # profile: kernels of forward on room and of foliage's reference (after), named scopes summed.
 # profile_b: deferred on room and on glass (copies named).
 # glass: every pipeline on glass (16-frame pan), deferred and forward with larger shading
@@ -47,12 +47,12 @@ for part in "$@"; do
     done
   elif [ "$part" = reference ]; then
     S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
-    R="--frames 2 --rounds 3 --pipelines reference reference:chunk=8294400"
-    PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 $S $R --scenes foliage room 2>&1 | quiet \
-      | grep '^{' | sed 's/^{/{"tree": "after", /' | tee -a "$OUT/reference.jsonl"
-    PYTHONPATH=$PWD/.v/v14:/tmp/site timeout -k 5 100 $S --frames 2 --rounds 3 --scenes foliage \
-      --pipelines reference 2>&1 | quiet | grep '^{' | sed 's/^{/{"tree": "v14", /' \
-      | tee -a "$OUT/reference.jsonl"
+    R="--frames 2 --rounds 3 --pipelines reference"
+    for t in after v14; do
+      if [ $t = after ]; then T=$PWD; else T=$PWD/.v/$t; fi
+      PYTHONPATH=$T:/tmp/site timeout -k 5 200 $S $R --scenes ${REF_SCENES:-stripes foliage room glass} \
+        2>&1 | quiet | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/reference.jsonl"
+    done
   elif [ "$part" = glass ]; then
     S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
     G="--frames 16 --rounds 5 --scenes glass"

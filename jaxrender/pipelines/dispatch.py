@@ -61,6 +61,7 @@ class WorkList:
     invocations: Array | None = None
     chunk: int = static_field(default=0)
     launched: Array | None = None  # chunks launched, when a launch rounded the count up
+    launched_lanes: Array | None = None  # lanes launched, when the launches differ in size
 
     @classmethod
     def of(cls, active: Array) -> "WorkList":
@@ -78,6 +79,8 @@ class WorkList:
     @property
     def lanes(self) -> Array:
         """Lanes launched: whole chunks, the last one's idle lanes included."""
+        if self.launched_lanes is not None:
+            return self.launched_lanes
         return self.chunks * self.chunk
 
     @property
@@ -229,28 +232,41 @@ def dispatch_lanes(
     return out, WorkList(jnp.zeros((0,), jnp.int32), n, wrote, chunk, launched)
 
 
-def shade_in_place(
+def shade_dense(
     active: Array,
     points_of: Callable[[Array], object],
     shade_fn: Callable[[object], Array],
     out: Array,
 ) -> tuple[Array, WorkList]:
-    """``shade`` of the True entries of bool[N] ``active`` in one launch of N lanes, each lane
-    its own entry, inactive lanes idle: what ``shade`` with a chunk of N launches, without the
-    compaction and the scatter back. For lists that fill most of their launch (the reference's
-    samples: every covered pixel of the screen, 64 times a frame), where those two passes cost
-    more than the idle lanes; nothing is launched for an empty list. Same counts as ``shade``
-    with ``chunk = N``: ``count`` and ``invocations`` the active entries, one chunk of N lanes."""
+    """``shade`` of the True entries of bool[N] ``active`` in one launch, for lists that often
+    fill most of their launch (the reference's samples, 64 screens a frame): at most half
+    active, they are compacted into a launch of N // 2 lanes and scattered back; more, every
+    entry runs in place, inactive lanes idle, which spares the compaction and the scatter
+    where they would cost more than the idle lanes (on an H200 the reference's room, 90%
+    covered, is 3% slower compacted, foliage, 37% covered, 17% faster). Nothing is launched
+    for an empty list. Counts: ``count`` and ``invocations`` the active entries, one launch,
+    its lanes in ``lanes``."""
     n = active.shape[0]
+    half = n // 2
     count = jnp.sum(active, dtype=jnp.int32)
 
-    def launch(acc):
+    def in_place(acc):
         pts = points_of(jnp.arange(n, dtype=jnp.int32))
         pts = dataclasses.replace(pts, valid=pts.valid & active)
         vals = shade_fn(pts)
         keep = active.reshape(active.shape + (1,) * (vals.ndim - 1))
         return jnp.where(keep, vals.astype(acc.dtype), acc)
 
-    out = jax.lax.cond(count > 0, launch, lambda acc: acc, out)
+    def compacted(acc):
+        items, _ = compact_indices(active, half)
+        live = jnp.arange(half, dtype=jnp.int32) < count
+        pts = points_of(items)
+        pts = dataclasses.replace(pts, valid=pts.valid & live)
+        vals = shade_fn(pts).astype(acc.dtype)
+        return acc.at[jnp.where(live, items, n)].set(vals, mode="drop", unique_indices=True)
+
+    which = jnp.where(count == 0, 0, jnp.where(count <= half, 1, 2))
+    out = jax.lax.switch(which, [lambda acc: acc, compacted, in_place], out)
+    lanes = jnp.where(which == 0, 0, jnp.where(which == 1, half, n)).astype(jnp.int32)
     items = jnp.zeros((0,), jnp.int32)
-    return out, WorkList(items, count, count, n, (count > 0).astype(jnp.int32))
+    return out, WorkList(items, count, count, n, (count > 0).astype(jnp.int32), lanes)

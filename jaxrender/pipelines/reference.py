@@ -57,9 +57,11 @@ DEFAULT_K = 8
 @dataclass(frozen=True)
 class ReferenceConfig(RenderConfig):
     """k: samples per pixel side (k x k stratified cell centres); chunk: shading work-list
-    chunk size (0: the whole screen, one launch per sample: a sample's covered pixels are most
-    of the screen, and k^2 samples times several launches each cost more in launches than the
-    idle lanes of one; it shows in the dispatch counts lanes, chunks and helper_lanes);
+    chunk size (0: one launch a pass, of its covered samples compacted into half its lanes
+    when at most half are covered, else of all of them in place: a pass's covered samples are
+    often most of its screens, and 64 samples times several launches each cost more in
+    launches than the idle lanes of one; it shows in the dispatch counts lanes, chunks and
+    helper_lanes);
     convergence: also render at
     2k and report ``counts['convergence_psnr']`` (LDR PSNR between the k and 2k images; costs
     5x the plain render); samples_per_pass: samples rasterized in one traversal and shaded in
@@ -173,10 +175,11 @@ def _offset(s: Array, k: Array) -> Array:
 
 
 def _shade_samples(covered, points_of, shade_fn, out, chunk: int):
-    """A pass's covered samples shaded: in one launch of every sample of every pixel by
-    default (chunk 0), else through the compacted dispatch in chunks of ``chunk``."""
+    """A pass's covered samples shaded: in one launch by default (chunk 0; compacted into half
+    the pass's lanes when at most half are covered, else in place: ``dispatch.shade_dense``),
+    else through the compacted dispatch in chunks of ``chunk``."""
     if chunk == 0:
-        return dispatch.shade_in_place(covered, points_of, shade_fn, out)
+        return dispatch.shade_dense(covered, points_of, shade_fn, out)
     return dispatch.shade(dispatch.WorkList.of(covered), points_of, shade_fn, out, chunk)
 
 

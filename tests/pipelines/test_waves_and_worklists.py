@@ -141,6 +141,37 @@ def test_packed_segmented_cummin_equals_the_scan(rng):
                                   err_msg="packed-key segmented cummin")
     np.testing.assert_array_equal(np.asarray(scan_segmented_cummin(*args)), want,
                                   err_msg="scan segmented cummin")
+    # Columns (forward's four quad lanes): each column its own running minimum, one segmentation.
+    cols = np.stack([values, values[::-1], np.roll(values, 3)], axis=1)
+    want_cols = np.stack([np.asarray(packed_segmented_cummin(jnp.asarray(c), args[1]))
+                          for c in cols.T], axis=1)
+    for fn in (packed_segmented_cummin, scan_segmented_cummin):
+        np.testing.assert_array_equal(np.asarray(fn(jnp.asarray(cols), args[1])), want_cols,
+                                      err_msg=f"{fn.__name__} of three columns")
+
+
+@pytest.mark.parametrize("n_active", [0, 1, 149, 150, 151, 300])
+def test_the_dense_launch_compacts_at_most_half_and_runs_more_in_place(rng, n_active):
+    """One launch: the active entries compacted into half the lanes while they fit, every
+    entry in place past that, nothing for none; the same values either way."""
+    import dataclasses
+
+    @dataclasses.dataclass
+    class Points:
+        index: jnp.ndarray
+        valid: jnp.ndarray
+
+    active = np.zeros(300, bool)
+    active[rng.choice(300, n_active, replace=False)] = True
+    points_of = lambda items: Points(items, jnp.ones(items.shape, bool))  # noqa: E731
+    shade_fn = lambda p: jnp.where(p.valid, p.index.astype(jnp.float32) * 2 + 1, 0.0)  # noqa
+    out, done = dispatch.shade_dense(jnp.asarray(active), points_of, shade_fn,
+                                     jnp.full((300,), -1.0, jnp.float32))
+    np.testing.assert_array_equal(np.asarray(out), np.where(active, np.arange(300) * 2.0 + 1.0,
+                                                            -1.0), err_msg=str(n_active))
+    lanes = 0 if n_active == 0 else 150 if n_active <= 150 else 300
+    assert (int(done.invocations), int(done.chunks), int(done.lanes)) == (
+        n_active, int(n_active > 0), lanes)
 
 
 @pytest.mark.parametrize("pipeline", ["forward", "deferred", "visbuffer", "checkerboard",
