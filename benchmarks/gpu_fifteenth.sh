@@ -2,7 +2,8 @@
 # Fifteenth session, one device call per line below (carry .whl and .v; build .v with
 # benchmarks/variants/prepare.sh first; v14 = 07b2d0c, the tree before this session):
 #   bash benchmarks/gpu_fifteenth.sh forward reference profile     (ran 2026-12-05)
-#   bash benchmarks/gpu_fifteenth.sh reference glass profile_b     (about 7 minutes)
+#   bash benchmarks/gpu_fifteenth.sh reference glass chunks        (about 8 minutes)
+#   bash benchmarks/gpu_fifteenth.sh profile_b
 # forward: forward (one sort: the draw list by quad, triangle, lane; no quad sort) and
 #   deferred (unchanged, the control) on room, foliage, thin and terrain, 16-frame pans,
 #   this checkout ("after") against v14, --checksum (image sums and invocations must agree).
@@ -13,12 +14,18 @@
 #   compacted, in place and with chunk = 8 x 1920 x 1080 / 2; "after" now launches each pass
 #   once, compacted into half its lanes when at most half its samples are covered
 #   (dispatch.shade_dense). Prediction: foliage about 34 ms (the chunked row), room as in place.
+#   ref_chunks: the same with traversal chunks of a quarter of the default work capacity (a
+#   chunk of 4.2M items times 8 samples a pass holds 3.0M items on foliage, 5.7M on room: 28%
+#   and 47% of its lanes idle; a quarter wastes 4-10% for 3-4x the loop iterations).
 # profile: kernels of forward on room and of foliage's reference (after), named scopes summed.
 # profile_b: deferred on room and on glass (copies named).
 # glass: every pipeline on glass (16-frame pan), deferred and forward with larger shading
 #   chunks (the transparent pass's dispatch runs ~16 chunks of 2^18 lanes a screen, each a
 #   loop iteration that reads its condition back) and with JAXRENDER_DISPATCH=switch, and
-#   the blend_loop tree (the blending pass's layers in a loop again).
+#   with BLEND_LOOP=1 the blend_loop tree (the blending pass's layers in a loop again).
+# chunks: deferred and forward on room and foliage with shading chunks of 2^20 against the
+#   automatic 2^17-2^18 (a full screen is 8-16 loop iterations, each reading its condition
+#   back; forward on room had 1.0 ms of device idle in a 4.3 ms span).
 # msaa: as in gpu_fourteenth.sh (deferred with and without MSAA, after against v13).
 . "$(dirname "$0")/gpu_env.sh"
 P() { echo "### $*" >> "$OUT/profile.md"
@@ -48,9 +55,9 @@ for part in "$@"; do
   elif [ "$part" = reference ]; then
     S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
     R="--frames 2 --rounds 3 --pipelines reference"
-    for t in after v14; do
+    for t in ${REF_TREES:-after ref_chunks v14}; do
       if [ $t = after ]; then T=$PWD; else T=$PWD/.v/$t; fi
-      PYTHONPATH=$T:/tmp/site timeout -k 5 200 $S $R --scenes ${REF_SCENES:-stripes foliage room glass} \
+      PYTHONPATH=$T:/tmp/site timeout -k 5 120 $S $R --scenes ${REF_SCENES:-stripes foliage room glass} \
         2>&1 | quiet | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/reference.jsonl"
     done
   elif [ "$part" = glass ]; then
@@ -63,8 +70,14 @@ for part in "$@"; do
     JAXRENDER_DISPATCH=switch PYTHONPATH=$PWD:/tmp/site timeout -k 5 80 $S $G \
       --pipelines deferred forward 2>&1 | quiet | grep '^{' \
       | sed 's/^{/{"tree": "after_switch", /' | tee -a "$OUT/glass.jsonl"
-    PYTHONPATH=$PWD/.v/blend_loop:/tmp/site timeout -k 5 80 $S $G --pipelines deferred forward \
-      2>&1 | quiet | grep '^{' | sed 's/^{/{"tree": "blend_loop", /' | tee -a "$OUT/glass.jsonl"
+    [ -n "${BLEND_LOOP:-}" ] && PYTHONPATH=$PWD/.v/blend_loop:/tmp/site timeout -k 5 80 $S $G \
+      --pipelines deferred forward 2>&1 | quiet | grep '^{' \
+      | sed 's/^{/{"tree": "blend_loop", /' | tee -a "$OUT/glass.jsonl"
+  elif [ "$part" = chunks ]; then
+    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 $S --frames 16 --rounds 5 --scenes room foliage \
+      --pipelines deferred deferred:chunk=1048576 forward forward:chunk=1048576 2>&1 | quiet \
+      | grep '^{' | sed 's/^{/{"tree": "after", /' | tee -a "$OUT/chunks.jsonl"
   elif [ "$part" = msaa ]; then
     bash benchmarks/gpu_fourteenth.sh msaa
   fi
