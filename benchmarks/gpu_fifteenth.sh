@@ -2,7 +2,9 @@
 # Fifteenth session, one device call per line below (carry .whl and .v; build .v with
 # benchmarks/variants/prepare.sh first; v14 = 07b2d0c, the tree before this session):
 #   bash benchmarks/gpu_fifteenth.sh forward reference profile     (ran 2026-12-05)
-#   bash benchmarks/gpu_fifteenth.sh reference glass chunks        (about 8 minutes)
+#   REF_TREES="after ref_chunks" REF_SCENES="foliage stripes room" bash ... reference   (ran)
+#   bash benchmarks/gpu_fifteenth.sh chunks                        (ran)
+#   bash benchmarks/gpu_fifteenth.sh glass                         (not run)
 #   bash benchmarks/gpu_fifteenth.sh profile_b
 # forward: forward (one sort: the draw list by quad, triangle, lane; no quad sort) and
 #   deferred (unchanged, the control) on room, foliage, thin and terrain, 16-frame pans,
@@ -14,9 +16,8 @@
 #   compacted, in place and with chunk = 8 x 1920 x 1080 / 2; "after" now launches each pass
 #   once, compacted into half its lanes when at most half its samples are covered
 #   (dispatch.shade_dense). Prediction: foliage about 34 ms (the chunked row), room as in place.
-#   ref_chunks: the same with traversal chunks of a quarter of the default work capacity (a
-#   chunk of 4.2M items times 8 samples a pass holds 3.0M items on foliage, 5.7M on room: 28%
-#   and 47% of its lanes idle; a quarter wastes 4-10% for 3-4x the loop iterations).
+#   ref_chunks (measured 2026-12-05, not adopted, patch removed): traversal chunks of a
+#   quarter of the default work capacity.
 # profile: kernels of forward on room and of foliage's reference (after), named scopes summed.
 # profile_b: deferred on room and on glass (copies named).
 # glass: every pipeline on glass (16-frame pan), deferred and forward with larger shading
