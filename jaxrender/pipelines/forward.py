@@ -2,13 +2,14 @@
 depth test at the moment it is drawn.
 
 The draw is replayed from the fragment list: sorted so that each pixel's fragments are in
-triangle (submission) order, and a segmented running minimum of the depth written so far decides
-which pass (GL_LESS). One sample sorts by (2x2 quad, triangle, lane): each pixel's fragments
-in order, and the units of one (triangle, quad) together, which counts the quads without a
-second sort; several samples sort by (sample, pixel, triangle). With ``z_prepass`` a depth-only pass first fills the depth buffer
-(honouring the alpha test), then only fragments at exactly that depth are shaded (GL_EQUAL):
-one shade per visible pixel, while the 2x2 quads still launch helper lanes. Under MSAA the
-depth test runs per sample and the shader once per (pixel, triangle) with any sample passing,
+triangle (submission) order, and a segmented running minimum of the depth written so far
+decides which pass (GL_LESS). One sample sorts by (2x2 quad, triangle, lane): each pixel's
+fragments in order, and the units of one (triangle, quad) together, which counts the quads
+without a second sort; several samples sort by (sample, pixel, triangle). With ``z_prepass``
+a depth-only pass first fills the depth buffer (honouring the alpha test), then only
+fragments at exactly that depth are shaded (GL_EQUAL): one shade per visible pixel, while the
+2x2 quads still launch helper lanes. Under MSAA the depth test runs per sample and the shader
+once per (pixel, triangle) with any sample passing,
 at the pixel centre; samples are resolved by averaging.
 """
 
