@@ -92,8 +92,8 @@ class ReferenceConfig(RenderConfig):
 
 # ------------------------------------------------------------------ visibility of one sample
 
-# The alpha test's launch: a quarter of a traversal chunk's lanes (items times samples), which
-# holds the covered samples of a pass's chunk in one or two launches on the built-in scenes.
+# The alpha test's launch: a quarter of a traversal chunk's lanes (items times samples); the
+# covered samples of alpha-tested triangles are a fraction of a chunk's box pixels.
 ALPHA_CHUNKS = 4
 
 
