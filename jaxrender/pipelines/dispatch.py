@@ -92,24 +92,27 @@ class WorkList:
         return {"invocations": self.invocations, "lanes": self.lanes, "chunks": self.chunks}
 
 
-LAUNCH_MODES = ("loop", "switch", "binary")
+LAUNCH_MODES = ("loop", "blocks", "switch", "binary")
 ENV_LAUNCH = "JAXRENDER_DISPATCH"
+BLOCK = 4  # chunks in one launch of the blocks mode
 
 
 def launch_mode(default: str = "loop") -> str:
     """How a work list's chunks are launched, read when a program is traced:
-    ``JAXRENDER_DISPATCH`` (loop, switch or binary), else ``default`` (the list's own: "loop"
-    for all but DACS's levels).
+    ``JAXRENDER_DISPATCH`` (loop, blocks, switch or binary), else ``default`` (the list's own:
+    "loop" for all but DACS's levels).
 
-    - loop: one ``while`` iteration per chunk (on a GPU each iteration reads its condition back
-      and launches the body's kernels again).
-    - switch: one launch of the smallest power-of-two number of chunks that holds the list
-      (one condition, one set of kernels; up to half the lanes idle, counted in ``lanes``).
-    - binary: one launch per set bit of the chunk count (exactly the loop's lanes, a
-      condition per bit).
-    Measured on an H200 at 1920x1080 the three are within 3% of each other on every pipeline
-    (benchmarks/RESULTS.md), so the loop, which compiles the shader once, is the default; switch
-    and binary compile it once per launch size."""
+    On a GPU every loop iteration and every branch reads a value back to the host before it
+    launches (``bench.round_trips`` counts them), so the modes trade those reads against idle
+    lanes and against copies of the shader compiled (one per launch size):
+
+    - loop: one ``while`` iteration per chunk: n + 1 reads for n chunks, one size.
+    - blocks: a loop over blocks of BLOCK chunks, then a loop over the chunks left: n // 4 +
+      n % 4 + 2 reads, exactly the loop's lanes, two sizes.
+    - switch: one launch of the smallest power-of-two number of chunks that holds the list:
+      one read; up to half the lanes idle (counted in ``lanes``); a size per power of two.
+    - binary: one launch per set bit of the chunk count: a read per bit, exactly the loop's
+      lanes, a size per bit."""
     said = os.environ.get(ENV_LAUNCH, "").strip().lower()
     if said:
         if said not in LAUNCH_MODES:
@@ -123,6 +126,14 @@ def _launch(n_chunks: Array, max_chunks: int, chunk: int, launch, acc, mode: str
     traced, size static) as ``mode`` says; returns (acc, chunks launched)."""
     if mode == "loop":
         acc = jax.lax.fori_loop(0, n_chunks, lambda k, a: launch(k * chunk, chunk, a), acc)
+        return acc, n_chunks
+    if mode == "blocks":
+        n_blocks = n_chunks // BLOCK if max_chunks >= BLOCK else jnp.zeros_like(n_chunks)
+        if max_chunks >= BLOCK:  # a list that never fills a block launches none
+            big = chunk * BLOCK
+            acc = jax.lax.fori_loop(0, n_blocks, lambda k, a: launch(k * big, big, a), acc)
+        acc = jax.lax.fori_loop(n_blocks * BLOCK, n_chunks,
+                                lambda k, a: launch(k * chunk, chunk, a), acc)
         return acc, n_chunks
     bits = max(int(max_chunks) - 1, 0).bit_length()  # 2**bits >= max_chunks
     if mode == "binary":
@@ -160,8 +171,9 @@ def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
     chunk = int(min(resolve_chunk(chunk, items.shape[0]), max(items.shape[0], 1)))
     mode = launch_mode(default_mode)
     max_chunks = max(-(-items.shape[0] // chunk), 1)
-    # Zeros past the list for the lanes of the largest launch.
-    span = chunk if mode == "loop" else chunk << max(max_chunks - 1, 0).bit_length()
+    # Zeros past the list for the lanes of the largest launch past it (a block ends at or
+    # before the last chunk's end).
+    span = chunk if mode in ("loop", "blocks") else chunk << max(max_chunks - 1, 0).bit_length()
     padded = jnp.concatenate([items, jnp.zeros((span,), items.dtype)])
     sentinel = out.shape[0]  # out-of-range index: scatter drops the lane
 

@@ -123,6 +123,12 @@ def _program(pipe, static_cfg, mode, scene, static, cameras, traced, start):
 _program_jit = jax.jit(_program, static_argnums=(0, 1, 2))
 
 
+def unjitted(fixed) -> Callable:
+    """The program of ``arguments``' static arguments, as a plain function of its dynamic
+    ones: for tools that read or interpret its jaxpr (``jax.make_jaxpr``)."""
+    return lambda *args: _program(*fixed, *args)
+
+
 def cache_size() -> int:
     """Programs compiled so far in this process (tests: a camera move must not add one)."""
     return _program_jit._cache_size()

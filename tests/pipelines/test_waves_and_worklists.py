@@ -64,7 +64,7 @@ def test_every_launch_mode_writes_the_same_and_counts_its_lanes(rng, monkeypatch
 
 def test_an_unknown_launch_mode_is_refused(monkeypatch):
     monkeypatch.setenv(dispatch.ENV_LAUNCH, "unrolled")
-    with pytest.raises(ValueError, match="JAXRENDER_DISPATCH='unrolled'.*loop, switch, binary"):
+    with pytest.raises(ValueError, match="JAXRENDER_DISPATCH='unrolled'.*loop, blocks, switch, binary"):
         dispatch.launch_mode()
 
 
