@@ -118,3 +118,30 @@ def lex_sort_prefix(keys: Sequence[Array], limits: Sequence[int], payloads: Sequ
 
     which = sum((jnp.asarray(count) > m).astype(jnp.int32) for m in sizes[:-1])
     return jax.lax.switch(which, [sort_first(m) for m in sizes], (keys, list(payloads)))
+
+
+def on_prefix(fn, count: Array, rows, whole=None, fill=False):
+    """``fn(rows cut to their first m entries, whole) -> (row results, other results)`` for the
+    shortest m of ``prefix_sizes`` that holds ``count`` (int32, traced) entries: for work over
+    a list whose entries at and past ``count`` are empty, so that it costs what the list
+    holds, not its capacity (one ``lax.switch``, one branch per size). Row results come back
+    padded to the full length with ``fill`` (a scalar, or a pytree of scalars matching the row
+    results); ``fn`` must give an empty entry the result ``fill`` for the answer not to depend
+    on m."""
+    n = jax.tree_util.tree_leaves(rows)[0].shape[0]
+    sizes = prefix_sizes(n)
+
+    def cut(m: int):
+        def branch(operands):
+            part, rest = operands
+            out_rows, out_rest = fn(jax.tree_util.tree_map(lambda a: a[:m], part), rest)
+            fills = (jax.tree_util.tree_map(lambda _: fill, out_rows)
+                     if not isinstance(fill, (tuple, list, dict)) else fill)
+            padded = jax.tree_util.tree_map(
+                lambda a, f: jnp.concatenate([a, jnp.full((n - m,) + a.shape[1:], f, a.dtype)]),
+                out_rows, fills)
+            return padded, out_rest
+        return branch
+
+    which = sum((jnp.asarray(count) > m).astype(jnp.int32) for m in sizes[:-1])
+    return jax.lax.switch(which, [cut(m) for m in sizes], (rows, whole))

@@ -52,3 +52,30 @@ def test_lex_sort_prefix_equals_the_full_sort(count):
         np.testing.assert_array_equal(np.asarray(g), np.asarray(w), err_msg=f"key {i}, {count}")
     np.testing.assert_array_equal(np.asarray(got_payload), np.asarray(want_payload),
                                   err_msg=f"payload, count {count}")
+
+
+@pytest.mark.parametrize("count", [0, 1, 750, 751, 4499, 4500, 4501, 6000])
+def test_on_prefix_runs_the_shortest_prefix_that_holds_the_count(count):
+    """A running sum over the live entries, against the same over the whole list (NumPy), and
+    the prefix length the branch saw: the smallest of ``prefix_sizes`` at or above count."""
+    from jaxrender.sorting import on_prefix, prefix_sizes
+
+    n = 6000
+    rng = np.random.default_rng(count)
+    values = np.where(np.arange(n) < count, rng.integers(1, 9, n), 0).astype(np.int32)
+    live = np.arange(n) < count
+
+    def fn(rows, scale):
+        m = rows["v"].shape[0]
+        run = jnp.where(rows["live"], jnp.cumsum(rows["v"]), 0)
+        return {"run": run, "live": rows["live"]}, (jnp.sum(rows["v"]) * scale, jnp.int32(m))
+
+    out, (total, m) = on_prefix(fn, jnp.int32(count),
+                                {"v": jnp.asarray(values), "live": jnp.asarray(live)},
+                                jnp.int32(3), {"run": -1, "live": False})
+    want_run = np.where(live, np.cumsum(values), 0)
+    want_run[max(count, int(m)):] = -1  # past the prefix: the fill
+    np.testing.assert_array_equal(np.asarray(out["run"]), want_run, err_msg=f"count {count}")
+    np.testing.assert_array_equal(np.asarray(out["live"]), live, err_msg=f"count {count}")
+    assert int(total) == 3 * int(values.sum()), count
+    assert int(m) == min(s for s in prefix_sizes(n) if s >= count), (count, int(m))

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 import jaxrender.raster.samples as sample_patterns
+from jaxrender.compaction import compact_indices
 from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.dispatch import dispatch_lanes
 from jaxrender.pipelines.draw_waves import draw_waves
@@ -39,7 +40,7 @@ from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, poin
                                             points_at_xy, raster_fragments)
 from jaxrender.pipelines.waves import check_wave_size
 from jaxrender.shading import alpha_test, shade
-from jaxrender.sorting import EMPTY, lex_sort, lex_sort_prefix
+from jaxrender.sorting import EMPTY, lex_sort, lex_sort_prefix, on_prefix
 from jaxrender.types import Array, Frame
 
 INF = float("inf")
@@ -176,6 +177,17 @@ def _any_per_unit(draw: DrawList, flag: Array) -> Array:
     return jnp.zeros((n_frag,), jnp.int32).at[draw.unit].max(flag.astype(jnp.int32)) > 0
 
 
+def live_rows(draw: DrawList) -> dict:
+    """The draw list's per-fragment arrays, for ``on_prefix``: every fragment is in the first
+    ``draw.fragments`` entries (the list is sorted with its empty entries last)."""
+    fields = ("skey", "pixel", "tri", "depth", "valid", "seg", "slot", "unit", "lane")
+    return {f: getattr(draw, f) for f in fields if getattr(draw, f) is not None}
+
+
+def live_count(draw: DrawList) -> Array:
+    return jnp.minimum(draw.fragments, draw.tri.shape[0])
+
+
 def alpha_pass(scene, draw: DrawList, unit_points, cfg) -> tuple[Array, Array]:
     """The fragments that survive the alpha test, and the alpha-test invocations. Only a
     fragment in front of every earlier opaque fragment of its pixel can pass the depth test,
@@ -183,9 +195,14 @@ def alpha_pass(scene, draw: DrawList, unit_points, cfg) -> tuple[Array, Array]:
     valid = draw.valid
     if not scene.effects.alpha_test:
         return valid, jnp.int32(0)
-    tested = is_alpha_tested(scene, draw.tri) & valid
-    z_opaque = pixel_exclusive_cummin(draw, jnp.where(valid & ~tested, draw.depth, INF))
-    need = _any_per_unit(draw, tested & (draw.depth < z_opaque))
+
+    def alpha_candidates(rows, _):
+        d = draw._replace(**rows)
+        tested = is_alpha_tested(scene, d.tri) & d.valid
+        z_opaque = pixel_exclusive_cummin(d, jnp.where(d.valid & ~tested, d.depth, INF))
+        return (tested, _any_per_unit(d, tested & (d.depth < z_opaque))), None
+
+    (tested, need), _ = on_prefix(alpha_candidates, live_count(draw), live_rows(draw))
     keep_u, work = dispatch.shade(
         dispatch.WorkList.of(need), unit_points,
         lambda pts: alpha_test(pts, scene).astype(jnp.float32),
@@ -204,12 +221,42 @@ def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
         shaded = draw.valid & (draw.depth == z_final)  # GL_EQUAL against the pre-pass depth
     else:
         shaded = draw.valid & (draw.depth < pixel_exclusive_cummin(draw, zk))  # GL_LESS
-    shade_unit = _any_per_unit(draw, shaded)
     writer = shaded & keep
     order = jnp.arange(draw.tri.shape[0], dtype=jnp.int32)
     win = jnp.full((n_slots,), -1, jnp.int32).at[draw.slot].max(
         jnp.where(writer, order, -1), mode="drop")
-    return shade_unit, win
+    return _any_per_unit(draw, shaded), win
+
+
+def replay(draw: DrawList, opaque_valid: Array, transparent, keep: Array, n_s: int, cfg):
+    """The draw replayed over the list's filled prefix only (``on_prefix``): the depth test,
+    the transparent fragments in front (None without), the first unit of each (triangle,
+    quad) when the sort already grouped them, the shading work list and each pixel's shade
+    count. Returns (shade_unit bool[F], win int32[S * P], blended bool[F] or None, first
+    bool[F] or None, WorkList, per-pixel shades int32[P])."""
+    n_pix = cfg.width * cfg.height
+    marks_quads = draw.lane is not None and not cfg.shade_helpers
+    rows = {"draw": live_rows(draw), "opaque": opaque_valid, "keep": keep}
+    if transparent is not None:
+        rows["transparent"] = transparent
+
+    def run(rows, _):
+        d = draw._replace(**rows["draw"])
+        shade_unit, win = depth_test(d._replace(valid=rows["opaque"]), rows["keep"], n_s, cfg)
+        blended = forward_front(d, rows.get("transparent"), rows["keep"], cfg)
+        if blended is not None:  # shaded in the main pass, blended after it
+            shade_unit = shade_unit | blended
+        out = {"shade": shade_unit, "blended": blended}
+        if marks_quads:
+            out["first"] = first_units_of_quads(d.tri, d.seg, shade_unit)
+        out["items"], count = compact_indices(shade_unit, shade_unit.shape[0])
+        per_pixel = jnp.zeros((n_pix,), jnp.int32).at[
+            jnp.where(shade_unit, d.pixel, n_pix)].add(1, mode="drop")
+        return {k: v for k, v in out.items() if v is not None}, (win, count, per_pixel)
+
+    out, (win, count, per_pixel) = on_prefix(run, live_count(draw), rows)
+    return (out["shade"], win, out.get("blended"), out.get("first"),
+            dispatch.WorkList(out["items"], count), per_pixel)
 
 
 @register_frame("forward", ForwardConfig)
@@ -228,17 +275,14 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
     with jax.named_scope("alpha_test"):
         keep, alpha_invocations = alpha_pass(scene, opaque, unit_points, cfg)
     with jax.named_scope("depth_test"):
-        shade_unit, win = depth_test(opaque, keep, n_s, cfg)
-        blended = forward_front(draw, transparent, keep, cfg)
-        if blended is not None:  # shaded in the main pass, blended after it
-            shade_unit = shade_unit | blended
+        shade_unit, win, blended, first, work, per_pixel = replay(
+            draw, opaque.valid, transparent, keep, n_s, cfg)
     with jax.named_scope("quads"):
-        if cfg.shade_helpers or draw.lane is None:  # the helper lanes need the quads listed
+        if first is None:  # the helper lanes need the quads listed
             ql = quad_list(draw.tri, draw.pixel, shade_unit, cfg.width, cfg.height,
                            scene.faces.shape[0], live=draw.fragments if n_s == 1 else None)
             quads = (ql["start"], ql["tri"], ql["n_quads"])
         else:
-            first = first_units_of_quads(draw.tri, draw.seg, shade_unit)
             quads = (first, draw.tri, jnp.sum(first, dtype=jnp.int32))
     with jax.named_scope("shade"):
         colours = jnp.zeros((draw.tri.shape[0], 3), jnp.float32)
@@ -247,7 +291,7 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
                 ql["n_quads"] * 4, _helper_lane_fn(scene, camera, clip, cfg, ql), colours,
                 cfg.chunk, 4 * colours.shape[0])  # a quad holds one fragment at least
         else:
-            colours, work = forward_shade(scene, camera, shade_unit, unit_points, blended, cfg)
+            colours, work = forward_shade(scene, camera, work, unit_points, blended, cfg)
     with jax.named_scope("resolve"):
         image, covered = resolve_samples(colours[:, :3], draw, win, n_s, cfg)
     with jax.named_scope("counts"):
@@ -256,21 +300,19 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
         counts.update(vertex_counts(scene, full_passes=1, position_passes=int(cfg.z_prepass)))
     image, counts = forward_blend(scene, draw, blended, colours, image, counts, cfg)
     image = poison_on_overflow(image, counts["overflow"])
-    per_pixel = jnp.zeros((cfg.width * cfg.height,), jnp.int32).at[
-        jnp.where(shade_unit, draw.pixel, cfg.width * cfg.height)].add(1, mode="drop")
     return Frame(image, counts, {"shade_count": per_pixel.reshape(cfg.height, cfg.width)})
 
 
-def forward_shade(scene, camera, shade_unit, unit_points, blended, cfg):
-    """The main pass's one dispatch: with transparency, its transparent units return the
-    transparent pass's layer values (colour, opacity, view depth) too."""
+def forward_shade(scene, camera, work, unit_points, blended, cfg):
+    """The main pass's one dispatch of the work list of units to shade: with transparency,
+    its transparent units return the transparent pass's layer values (colour, opacity, view
+    depth) too."""
     if blended is None:
         shader, channels = (lambda p: shade(p, scene)), 3
     else:
         shader, channels = layer_shader(scene, camera), LAYER_CHANNELS
-    colours = jnp.zeros((shade_unit.shape[0], channels), jnp.float32)
-    return dispatch.shade(dispatch.WorkList.of(shade_unit), unit_points, shader, colours,
-                          cfg.chunk)
+    colours = jnp.zeros((work.items.shape[0], channels), jnp.float32)
+    return dispatch.shade(work, unit_points, shader, colours, cfg.chunk)
 
 
 def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
