@@ -24,7 +24,6 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 import jaxrender.raster.samples as sample_patterns
-from jaxrender.compaction import compact_indices
 from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.dispatch import dispatch_lanes
 from jaxrender.pipelines.draw_waves import draw_waves
@@ -231,9 +230,10 @@ def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
 def replay(draw: DrawList, opaque_valid: Array, transparent, keep: Array, n_s: int, cfg):
     """The draw replayed over the list's filled prefix only (``on_prefix``): the depth test,
     the transparent fragments in front (None without), the first unit of each (triangle,
-    quad) when the sort already grouped them, the shading work list and each pixel's shade
-    count. Returns (shade_unit bool[F], win int32[S * P], blended bool[F] or None, first
-    bool[F] or None, WorkList, per-pixel shades int32[P])."""
+    quad) when the sort already grouped them and each pixel's shade count; then the shading
+    work list, compacted outside the branch (inside it was slower on foliage; RESULTS.md).
+    Returns (shade_unit bool[F], win int32[S * P], blended bool[F] or None,
+    first bool[F] or None, WorkList, per-pixel shades int32[P])."""
     n_pix = cfg.width * cfg.height
     marks_quads = draw.lane is not None and not cfg.shade_helpers
     rows = {"draw": live_rows(draw), "opaque": opaque_valid, "keep": keep}
@@ -249,14 +249,13 @@ def replay(draw: DrawList, opaque_valid: Array, transparent, keep: Array, n_s: i
         out = {"shade": shade_unit, "blended": blended}
         if marks_quads:
             out["first"] = first_units_of_quads(d.tri, d.seg, shade_unit)
-        out["items"], count = compact_indices(shade_unit, shade_unit.shape[0])
         per_pixel = jnp.zeros((n_pix,), jnp.int32).at[
             jnp.where(shade_unit, d.pixel, n_pix)].add(1, mode="drop")
-        return {k: v for k, v in out.items() if v is not None}, (win, count, per_pixel)
+        return {k: v for k, v in out.items() if v is not None}, (win, per_pixel)
 
-    out, (win, count, per_pixel) = on_prefix(run, live_count(draw), rows)
+    out, (win, per_pixel) = on_prefix(run, live_count(draw), rows)
     return (out["shade"], win, out.get("blended"), out.get("first"),
-            dispatch.WorkList(out["items"], count), per_pixel)
+            dispatch.WorkList.of(out["shade"]), per_pixel)
 
 
 @register_frame("forward", ForwardConfig)
