@@ -31,9 +31,9 @@ import jax
 from jax.extend.core import ClosedJaxpr, Literal
 import numpy as np
 
-CONTROL = ("while", "cond", "scan")
 # Primitives that call one jaxpr with their own operands: followed inside, so the loops they
-# hold are counted (anything else with a jaxpr inside is bound whole and counted as nothing).
+# hold are counted. Any other primitive is bound whole; one that holds a loop or a branch in
+# a jaxpr of its own is refused (``held_reads``), so that no read goes uncounted.
 CALLS = {"pjit": "jaxpr", "jit": "jaxpr", "closed_call": "call_jaxpr",
          "custom_jvp_call": "call_jaxpr", "custom_vjp_call": "call_jaxpr",
          "custom_vjp_call_jaxpr": "fun_jaxpr", "remat": "jaxpr", "checkpoint": "jaxpr"}
@@ -126,7 +126,26 @@ def run_eqn(eqn, ins, tally: Tally, scans: int):
         return np.int32(gpu_branch(p["platforms"]))
     if name in CALLS and CALLS[name] in p:
         return run_jaxpr(as_closed(p[CALLS[name]]), ins, tally, scans)
+    if held_reads(p):
+        raise NotImplementedError(f"{name} holds a loop or a branch that round_trips cannot "
+                                  f"follow ({where_of(eqn)})")
     return eqn.primitive.bind(*ins, **eqn.primitive.get_bind_params(p))
+
+
+def sub_jaxprs(params: dict):
+    """The jaxprs among a primitive's parameters (a scatter's update function, say)."""
+    for v in params.values():
+        for x in (v if isinstance(v, (tuple, list)) else (v,)):
+            if hasattr(x, "eqns"):
+                yield x
+            elif hasattr(x, "jaxpr") and hasattr(x.jaxpr, "eqns"):
+                yield x.jaxpr
+
+
+def held_reads(params: dict) -> bool:
+    """Whether any jaxpr among ``params`` holds a ``while`` or a ``cond``."""
+    return any(e.primitive.name in ("while", "cond") or held_reads(e.params)
+               for j in sub_jaxprs(params) for e in j.eqns)
 
 
 def as_closed(jaxpr):

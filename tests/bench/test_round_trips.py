@@ -78,3 +78,18 @@ def test_dispatch_reads_by_launch_mode(monkeypatch, mode, n, chunk, want):
     np.testing.assert_array_equal(np.asarray(out), np.where(np.arange(16) < n,
                                                             np.arange(16) + 1.0, 0.0),
                                   err_msg=f"{mode}: the interpreted dispatch wrote wrong values")
+
+
+def test_a_loop_inside_an_unfollowed_primitive_is_refused():
+    """A primitive the counter does not follow (here custom_linear_solve) is bound whole; if
+    it held a loop, its reads would go uncounted, so the count is refused instead."""
+
+    def f(b):
+        solve = lambda mv, r: jax.lax.while_loop(  # noqa: E731
+            lambda a: a[1] < 3, lambda a: (a[0], a[1] + 1), (r / 2.0, 0))[0]
+        return jax.lax.custom_linear_solve(lambda x: x * 2.0, b, solve=solve)
+
+    closed = jax.make_jaxpr(f)(jnp.float32(1.0))
+    assert "custom_linear_solve" not in round_trips.CALLS
+    with pytest.raises(NotImplementedError, match="custom_linear_solve holds a loop"):
+        round_trips.run_jaxpr(closed, [jnp.float32(1.0)], round_trips.Tally())
