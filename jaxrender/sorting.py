@@ -97,6 +97,12 @@ def prefix_sizes(n: int) -> list[int]:
     return sorted({max(1, -(-n * int(f * 16) // 16)) for f in PREFIX_FRACTIONS} | {n})
 
 
+def prefix_branch(count: Array, sizes: Sequence[int]) -> Array:
+    """The index of the shortest of ``sizes`` (ascending, the last the whole list) that holds
+    ``count`` entries: the branch a prefix switch takes."""
+    return sum((jnp.asarray(count) > m).astype(jnp.int32) for m in sizes[:-1])
+
+
 def lex_sort_prefix(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Array],
                     count: Array) -> tuple[list[Array], list[Array]]:
     """``lex_sort`` of a list whose entries at and past ``count`` (int32, traced) are empty:
@@ -116,7 +122,7 @@ def lex_sort_prefix(keys: Sequence[Array], limits: Sequence[int], payloads: Sequ
                     [jnp.concatenate([h, p[m:]]) for h, p in zip(head_p, ps)])
         return branch
 
-    which = sum((jnp.asarray(count) > m).astype(jnp.int32) for m in sizes[:-1])
+    which = prefix_branch(count, sizes)
     return jax.lax.switch(which, [sort_first(m) for m in sizes], (keys, list(payloads)))
 
 
@@ -143,5 +149,5 @@ def on_prefix(fn, count: Array, rows, whole=None, fill=False):
             return padded, out_rest
         return branch
 
-    which = sum((jnp.asarray(count) > m).astype(jnp.int32) for m in sizes[:-1])
+    which = prefix_branch(count, sizes)
     return jax.lax.switch(which, [cut(m) for m in sizes], (rows, whole))

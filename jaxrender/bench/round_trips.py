@@ -49,8 +49,8 @@ class Tally:
     frames_length: int | None = None  # the outermost scan's length, once it is entered
     reads: collections.Counter = dataclasses.field(default_factory=collections.Counter)
 
-    def add(self, kind: str, where: str, n: int = 1) -> None:
-        self.reads[self.frame, kind, where] += n
+    def add(self, kind: str, where: str) -> None:
+        self.reads[self.frame, kind, where] += 1
 
     def per_frame(self) -> dict:
         out = collections.Counter()

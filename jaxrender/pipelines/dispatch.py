@@ -128,9 +128,9 @@ def _launch(n_chunks: Array, max_chunks: int, chunk: int, launch, acc, mode: str
         acc = jax.lax.fori_loop(0, n_chunks, lambda k, a: launch(k * chunk, chunk, a), acc)
         return acc, n_chunks
     if mode == "blocks":
-        n_blocks = n_chunks // BLOCK if max_chunks >= BLOCK else jnp.zeros_like(n_chunks)
+        n_blocks = jnp.zeros_like(n_chunks)
         if max_chunks >= BLOCK:  # a list that never fills a block launches none
-            big = chunk * BLOCK
+            big, n_blocks = chunk * BLOCK, n_chunks // BLOCK
             acc = jax.lax.fori_loop(0, n_blocks, lambda k, a: launch(k * big, big, a), acc)
         acc = jax.lax.fori_loop(n_blocks * BLOCK, n_chunks,
                                 lambda k, a: launch(k * chunk, chunk, a), acc)
