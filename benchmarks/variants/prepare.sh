@@ -2,7 +2,7 @@
 # Builds the trees that benchmarks/gpu_thirteenth.sh and gpu_fourteenth.sh time side by side:
 # .v/v0 (the code before the thirteenth session, 9a6cd99), .v/v13 (before the fourteenth,
 # c298392), .v/v14 (before the fifteenth, 07b2d0c), .v/v15 (before the sixteenth,
-# 39e025f) and one .v/<name> per patch here (HEAD's
+# 39e025f), .v/v16 (before the seventeenth, fd3a891) and one .v/<name> per patch here (HEAD's
 # jaxrender/ with the patch applied). Run from anywhere; .v/ is rebuilt from scratch.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -14,6 +14,8 @@ mkdir -p .v/v14
 git archive 07b2d0c jaxrender | tar -x -C .v/v14
 mkdir -p .v/v15
 git archive 39e025f jaxrender | tar -x -C .v/v15
+mkdir -p .v/v16
+git archive fd3a891 jaxrender | tar -x -C .v/v16
 for p in benchmarks/variants/*.patch; do
   name=$(basename "$p" .patch)
   mkdir -p ".v/$name"

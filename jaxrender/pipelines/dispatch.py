@@ -95,12 +95,16 @@ class WorkList:
 LAUNCH_MODES = ("loop", "blocks", "switch", "binary")
 ENV_LAUNCH = "JAXRENDER_DISPATCH"
 BLOCK = 4  # chunks in one launch of the blocks mode
+# The default: as fast as the loop or faster on 30 of 34 pipeline/scene rows on an H200, for
+# about 20% more compile time; the switch is faster still on a few but compiles twice as long
+# and can launch twice a list's lanes (RESULTS.md, seventeenth session).
+DEFAULT_LAUNCH = "blocks"
 
 
-def launch_mode(default: str = "loop") -> str:
+def launch_mode(default: str = DEFAULT_LAUNCH) -> str:
     """How a work list's chunks are launched, read when a program is traced:
     ``JAXRENDER_DISPATCH`` (loop, blocks, switch or binary), else ``default`` (the list's own:
-    "loop" for all but DACS's levels).
+    ``DEFAULT_LAUNCH`` for all but DACS's levels, which take the switch).
 
     On a GPU every loop iteration and every branch reads a value back to the host before it
     launches (``bench.round_trips`` counts them), so the modes trade those reads against idle
@@ -159,7 +163,7 @@ def _chunks_of(count: Array, chunk: int) -> Array:
 
 
 def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
-        chunk: int, default_mode: str = "loop") -> tuple[Array, WorkList]:
+        chunk: int, default_mode: str = DEFAULT_LAUNCH) -> tuple[Array, WorkList]:
     """For the live items of ``work``, write ``fn(items int32[L], live bool[L]) ->
     values[L, ...]`` into ``out[items]``, ``L`` lanes a launch (a multiple of ``chunk``).
 

@@ -33,8 +33,9 @@ from jaxrender.pipelines.os_memory import memory_counts
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
 from jaxrender.pipelines.registry import REGISTRY, register
 from jaxrender.pipelines.vertex_work import vertex_counts
-from jaxrender.pipelines.os_transparency import (blend_layers, merge_os_counts, pixel_rows,
-                                                 transparent_samples, transparent_shadels)
+from jaxrender.pipelines.os_transparency import (blend_layers, merge_os_counts,
+                                                 over_transparent_samples, pixel_rows,
+                                                 transparent_shadels)
 from jaxrender.pipelines.visibility import share_visibility, visibility
 from jaxrender.pipelines.waves import check_wave_size, count_waves
 from jaxrender.shading import shade, surface_points
@@ -286,7 +287,17 @@ def frame_step(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig, state: 
         fp = footprint(scene, sheet, flat(vis.tri_id), flat(vis.bary), flat(vis.dbary_dx),
                        flat(vis.dbary_dy))
     # Transparent layers in front of the opaque depth are samples too: they mark chunks.
-    fp_all, blended = transparent_samples(scene, sheet, camera, cfg, vis, fp)
+    return over_transparent_samples(
+        scene, sheet, camera, cfg, vis, fp,
+        lambda fp_all, blended: shade_and_resolve(scene, sheet, camera, cfg, state, shade_frame,
+                                                  vis, fp, fp_all, blended))
+
+
+def shade_and_resolve(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig,
+                      state: StoreState, shade_frame: Array, vis, fp, fp_all, blended):
+    """The frame from its samples' footprints ``fp_all`` (the pixels' ``fp``, then any
+    transparent fragments', ``blended``): the store planned, shaded and read."""
+    n_pix = cfg.width * cfg.height
     res = plan_store(scene, sheet, camera, cfg, state, fp_all, shade_frame)
     with jax.named_scope("shade"):
         active = (res.owned_slot & (res.live & ~res.reused)[:, None]).reshape(-1)

@@ -19,41 +19,64 @@ import jax.numpy as jnp
 
 from jaxrender.pipelines.os_marking import Footprint, footprint
 from jaxrender.pipelines.os_sheet import LANES
-from jaxrender.pipelines.transparency import (Layers, check_settings, composite, in_front,
+from jaxrender.pipelines.transparency import (Layers, check_settings, composite, front_work,
                                               settings_of, transparent_fragments)
 from jaxrender.pipelines.visibility import clip_vertices, is_transparent
 from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.shading import opacity, surface_points, view_depth
+from jaxrender.sorting import prefix_branch
 from jaxrender.types import Array
 
 
 class Blended(NamedTuple):
-    """The transparent fragments of a frame: the fragment list ``fr``, ``front`` bool[F] and
-    their surface points' barycentrics (bary, ddx, ddy float32[F, 3]) at the pixel centre."""
+    """The transparent fragments in front, compacted into a list of static length C: pixel,
+    tri, depth int32/int32/float32[C], front bool[C] (the first ``count`` entries), count
+    int32, overflowed bool (the fragment list's), and their surface points' barycentrics (bary,
+    ddx, ddy float32[C, 3]) at the pixel centre."""
 
-    fr: object
+    pixel: Array
+    tri: Array
+    depth: Array
     front: Array
+    count: Array
+    overflowed: Array
     bary: Array
     ddx: Array
     ddy: Array
 
 
-def transparent_samples(scene, sheet, camera, cfg, vis, fp: Footprint):
-    """(the footprints of the pixels and of the transparent fragments in front, joined; the
-    Blended fragments), or (fp, None) for a scene without transparency."""
+def over_transparent_samples(scene, sheet, camera, cfg, vis, fp: Footprint, tail):
+    """``tail(the samples' footprints, Blended or None)``: for a scene without transparency,
+    of the pixels' footprints ``fp``; else of those joined by the transparent fragments in
+    front, compacted into a list of one entry per pixel, or of the fragment list's length when
+    more are in front (one ``lax.switch``: every per-sample pass after this, the marking, the
+    allocation, the final reads, costs what the list holds, not the fragment capacity)."""
     check_settings(scene, cfg)
     if not scene.effects.transparency:
-        return fp, None
+        return tail(fp, None)
     w, h = cfg.width, cfg.height
     with jax.named_scope("transparent_marking"):
         clip = clip_vertices(scene, camera, cfg)
         fr = transparent_fragments(scene, clip, cfg)
-        front = in_front(fr, vis.depth.reshape(-1), w * h)
-        tri = jnp.where(front, fr.tri, -1)
-        b, dx, dy = pair_barycentrics(clip, scene.faces, tri, fr.pixel % w, fr.pixel // w, w, h)
-        fp_t = footprint(scene, sheet, tri, b, dx, dy)
-    joined = Footprint(*(jnp.concatenate([a, t]) for a, t in zip(fp, fp_t)))
-    return joined, Blended(fr, front, b, dx, dy)
+        _, work = front_work(fr, vis.depth.reshape(-1), w * h)
+    sizes = sorted({min(w * h, fr.pixel.shape[0]), fr.pixel.shape[0]})
+
+    def with_samples(size: int):
+        def branch(_):
+            with jax.named_scope("transparent_marking"):
+                items = work.items[:size]
+                front = jnp.arange(size, dtype=jnp.int32) < work.count
+                tri = jnp.where(front, fr.tri[items], -1)
+                pixel = fr.pixel[items]
+                b, dx, dy = pair_barycentrics(clip, scene.faces, tri, pixel % w, pixel // w, w, h)
+                fp_t = footprint(scene, sheet, tri, b, dx, dy)
+            joined = Footprint(*(jnp.concatenate([a, t]) for a, t in zip(fp, fp_t)))
+            return tail(joined, Blended(pixel, tri, fr.depth[items], front, work.count,
+                                        fr.overflowed, b, dx, dy))
+        return branch
+
+    return jax.lax.switch(prefix_branch(work.count, sizes), [with_samples(m) for m in sizes],
+                          None)
 
 
 def pixel_rows(tree, n_pix: int):
@@ -67,17 +90,16 @@ def blend_layers(scene, camera, blended: Blended | None, rows: Array, image: Arr
     if blended is None:
         return image, {}
     h, w = image.shape[:2]
-    fr = blended.fr
     with jax.named_scope("transparent_resolve"):
-        pts = surface_points(scene, camera, jnp.where(blended.front, fr.tri, -1), blended.bary,
-                             blended.ddx, blended.ddy)
+        tri = jnp.where(blended.front, blended.tri, -1)
+        pts = surface_points(scene, camera, tri, blended.bary, blended.ddx, blended.ddy)
         a = jnp.where(blended.front, opacity(pts, scene), 0.0)
         z = view_depth(pts, camera)
         values = jnp.concatenate([rows[w * h:], a[:, None], z[:, None]], axis=-1)
-        layers = Layers(fr.pixel, fr.tri, fr.depth, blended.front, values,
-                        jnp.minimum(fr.count, fr.pixel.shape[0]))
+        layers = Layers(blended.pixel, blended.tri, blended.depth, blended.front, values,
+                        blended.count)
         out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
-    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
+    counts["overflow"] = counts["overflow"] + blended.overflowed.astype(jnp.int32)
     return out.reshape(h, w, 3), counts
 
 

@@ -36,6 +36,7 @@ import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
+from jaxrender.compaction import compact_indices
 from jaxrender.pipelines.base import BLENDING_DEFAULTS
 from jaxrender.pipelines.quads import segment_starts
 from jaxrender.pipelines.visibility import (clip_vertices, faces_where, is_transparent, points_at,
@@ -46,7 +47,7 @@ from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
 from jaxrender.shading import opacity, shade, surface_points, view_depth
-from jaxrender.sorting import lex_sort, lex_sort_prefix
+from jaxrender.sorting import lex_sort, on_prefix
 from jaxrender.types import Array
 
 LAYER_BYTES = 20  # a k-buffer entry: premultiplied RGB and transmittance (4 float32), a depth
@@ -116,8 +117,14 @@ class Layers(NamedTuple):
 def in_front(fr, opaque_depth: Array, n_pix: int) -> Array:
     """bool[F]: listed fragments strictly in front of the opaque depth float32[P] (GL_LESS
     against the opaque pass's depth buffer, no depth write)."""
-    z = opaque_depth.at[jnp.where(fr.valid, fr.pixel, n_pix)].get(mode="fill", fill_value=0.0)
-    return fr.valid & (fr.depth < z)
+    return listed_in_front(fr.valid, fr.pixel, fr.depth, opaque_depth, n_pix)
+
+
+def listed_in_front(valid: Array, pixel: Array, depth: Array, opaque_depth: Array,
+                    n_pix: int) -> Array:
+    """``in_front`` of a list's columns."""
+    z = opaque_depth.at[jnp.where(valid, pixel, n_pix)].get(mode="fill", fill_value=0.0)
+    return valid & (depth < z)
 
 
 def transparent_fragments(scene, clip, cfg, sample_offset=(0.5, 0.5)):
@@ -127,13 +134,31 @@ def transparent_fragments(scene, clip, cfg, sample_offset=(0.5, 0.5)):
                             sample_offset=sample_offset)
 
 
-def shade_layers(scene, camera, fr, front, points_of, chunk: int):
-    """Shade the front fragments (one compacted work list). Returns (Layers, WorkList)."""
+def front_work(fr, opaque_depth: Array, n_pix: int) -> tuple[Array, dispatch.WorkList]:
+    """(``in_front``, those fragments as one compacted work list), both read off the fragment
+    list's filled prefix only (``on_prefix``)."""
+    def on_filled(part, depth):
+        front = listed_in_front(*part, depth, n_pix)
+        items, count = compact_indices(front, front.shape[0])
+        return (front, items), count
+
+    (front, items), count = on_prefix(on_filled, live_fragments(fr),
+                                      (fr.valid, fr.pixel, fr.depth), opaque_depth,
+                                      fill=(False, 0))
+    return front, dispatch.WorkList(items, count)
+
+
+def live_fragments(fr) -> Array:
+    """int32: the entries of a fragment list that hold a fragment (all in its first ones)."""
+    return jnp.minimum(fr.count, fr.pixel.shape[0])
+
+
+def shade_layers(scene, camera, fr, front, work, points_of, chunk: int):
+    """Shade the ``front`` fragments listed in ``work`` (``front_work``). Returns (Layers,
+    WorkList)."""
     values = jnp.zeros((front.shape[0], LAYER_CHANNELS), jnp.float32)
-    values, work = dispatch.shade(dispatch.WorkList.of(front), points_of,
-                                  layer_shader(scene, camera), values, chunk)
-    live = jnp.minimum(fr.count, fr.pixel.shape[0])
-    return Layers(fr.pixel, fr.tri, fr.depth, front, values, live), work
+    values, work = dispatch.shade(work, points_of, layer_shader(scene, camera), values, chunk)
+    return Layers(fr.pixel, fr.tri, fr.depth, front, values, live_fragments(fr)), work
 
 
 def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
@@ -147,12 +172,12 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
     with jax.named_scope("transparent"):
         clip = clip_vertices(scene, camera, cfg)
         fr = transparent_fragments(scene, clip, cfg)
-        front = in_front(fr, opaque_depth.reshape(-1), w * h)
+        front, work = front_work(fr, opaque_depth.reshape(-1), w * h)
 
         def points_of(items):
             return points_at(scene, camera, clip, cfg, fr.tri[items], fr.pixel[items])
 
-        layers, work = shade_layers(scene, camera, fr, front, points_of, cfg.chunk)
+        layers, work = shade_layers(scene, camera, fr, front, work, points_of, cfg.chunk)
         out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts["transparent_invocations"] = work.invocations
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
@@ -186,7 +211,21 @@ def blend_factors(scene, layers: Layers) -> tuple[Array, Array, Array]:
 
 def composite(scene, layers: Layers, background: Array, settings: BlendSettings):
     """Blend the front layers over background float32[P, 3]. Returns (image float32[P, 3],
-    counts: transparent_layers_mean/_max, transparent_passes, transparent_bytes, overflow)."""
+    counts: transparent_layers_mean/_max, transparent_passes, transparent_bytes, overflow).
+    With ``layers.live``, only the list's filled prefix is read (``on_prefix``): a fragment
+    list is sized for a few times what a frame fills."""
+    if layers.live is None:
+        return composite_list(scene, layers, background, settings)
+
+    def on_filled(part, bg):
+        return (), composite_list(scene, part, bg, settings)
+
+    _, out = on_prefix(on_filled, layers.live, layers._replace(live=None), background)
+    return out
+
+
+def composite_list(scene, layers: Layers, background: Array, settings: BlendSettings):
+    """``composite`` over every entry of the list."""
     n_pix = background.shape[0]
     per_pixel = jnp.zeros((n_pix,), jnp.int32).at[
         jnp.where(layers.front, layers.pixel, n_pix)].add(1, mode="drop")
@@ -221,11 +260,7 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
         order, limit = layers.tri, scene.num_triangles - 1  # first drawn first
     # Out of range, so sorted last: every key of the entries not blended.
     keys = (jnp.where(layers.front, layers.pixel, n_pix), jnp.where(layers.front, order, limit + 1))
-    if layers.live is None:
-        (pix, _), (premult, trans) = lex_sort(keys, (n_pix - 1, limit), (premult, trans))
-    else:
-        (pix, _), (premult, trans) = lex_sort_prefix(keys, (n_pix - 1, limit), (premult, trans),
-                                                     layers.live)
+    (pix, _), (premult, trans) = lex_sort(keys, (n_pix - 1, limit), (premult, trans))
     n_entries = pix.shape[0]
     # Each pixel's layers lie together in the sorted list, farthest first, from its first
     # entry on: a pass reads layers k cap .. k cap + cap - 1 of every pixel from there.
@@ -282,8 +317,9 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
     return mean * (1.0 - reveal)[:, None] + reveal[:, None] * background + glow
 
 
-__all__ = ["BlendSettings", "check_settings", "composite", "forward_blend", "forward_front",
-           "forward_split", "in_front", "LAYER_BYTES", "layer_shader", "Layers", "merge_counts",
+__all__ = ["BlendSettings", "check_settings", "composite", "composite_list", "forward_blend",
+           "forward_front", "forward_split", "front_work", "in_front", "LAYER_BYTES",
+           "layer_shader", "Layers", "listed_in_front", "live_fragments", "merge_counts",
            "refuse_transparency", "sample_pass", "settings_of", "shade_layers",
            "sorted_composite", "transparent_fragments", "transparent_pass", "wboit_weight",
            "weighted_composite"]
@@ -351,7 +387,7 @@ def sample_pass(scene, camera, clip, offsets: Array, live: Array, opaque_depth: 
     fr = collect_fragments(clip, faces, w, h, n_s * 4 * n_pix, False, offsets,
                            default_work_capacity(n_tris, w, h), default_clip_capacity(n_tris),
                            live=live)
-    front = in_front(fr, opaque_depth, n_s * n_pix)
+    front, work = front_work(fr, opaque_depth, n_s * n_pix)
     off_px = offsets.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
 
     def points_of(items):
@@ -361,7 +397,8 @@ def sample_pass(scene, camera, clip, offsets: Array, live: Array, opaque_depth: 
                                       (off_px[sample, 0], off_px[sample, 1]))
         return surface_points(scene, camera, t, b, dx * deriv_scale, dy * deriv_scale)
 
-    layers, work = shade_layers(scene, camera, fr, front, points_of, cfg.chunk or n_s * n_pix)
+    layers, work = shade_layers(scene, camera, fr, front, work, points_of,
+                                cfg.chunk or n_s * n_pix)
     out, counts = composite(scene, layers, rgb, BlendSettings())
     counts["transparent_invocations"] = work.invocations
     counts["transparent_lanes"], counts["transparent_chunks"] = work.lanes, work.chunks

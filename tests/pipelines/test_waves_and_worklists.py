@@ -184,8 +184,8 @@ def test_every_pipeline_checks_wave_size_one_way(pipeline):
         make_config(pipeline, width=8, height=8, wave_size=48)
 
 
-def test_the_loop_is_the_default_and_the_variable_is_read_case_blind(monkeypatch):
+def test_blocks_is_the_default_and_the_variable_is_read_case_blind(monkeypatch):
     monkeypatch.delenv(dispatch.ENV_LAUNCH, raising=False)
-    assert dispatch.launch_mode() == "loop"
+    assert dispatch.launch_mode() == "blocks"
     monkeypatch.setenv(dispatch.ENV_LAUNCH, " Binary ")
     assert dispatch.launch_mode() == "binary"

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Seventeenth session's device calls (2026-12-05): build .v with benchmarks/variants/prepare.sh,
+# carry [".whl", ".v"], one call per line:
+#   bash benchmarks/gpu_sixteenth.sh modes_a        (loop / blocks / switch on room, thin)
+#   bash benchmarks/gpu_sixteenth.sh modes_b        (foliage, glass, terrain)
+#   bash benchmarks/gpu_seventeenth.sh glass profile
+# glass: every pipeline on glass, this checkout against v16 (fd3a891): the transparent pass's
+#   front test, work list and composite now read the fragment list's filled prefix only
+#   (`transparency.front_work`, `composite` through `sorting.on_prefix`); glass fills about 15%
+#   of its 8.3M-entry list at 1920x1080. Prediction: 0.2-0.5 ms a frame less for deferred,
+#   visbuffer, checkerboard, DACS and TADS on glass; object space less (its joined footprint
+#   still spans the whole list). Forward on room and foliage against v15 too (the sixteenth
+#   session's replay over the prefix), with deferred on room as the control.
+# profile: object space on glass, kernel by kernel, to see what its 8.4 ms are.
+. "$(dirname "$0")/gpu_env.sh"
+S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 16"
+for part in "$@"; do
+  if [ "$part" = glass ]; then
+    for t in after v16; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 200 $S --rounds 5 --scenes glass \
+        --pipelines forward deferred visbuffer checkerboard dacs object_space 2>&1 | quiet \
+        | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/glass.jsonl"
+    done
+    for t in after v15; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 120 $S --rounds 5 --scenes room foliage \
+        --pipelines forward deferred 2>&1 | quiet | grep '^{' \
+        | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/forward.jsonl"
+    done
+  elif [ "$part" = profile ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py \
+      object_space --scene glass --top 16 --calls 2 --scope visibility --scope transparent_marking \
+      --scope mark_allocate --scope reuse --scope shade --scope resolve --scope transparent_resolve \
+      --scope counts 2>&1 | quiet | tee -a "$OUT/profile.md"
+  fi
+done
+exit 0
