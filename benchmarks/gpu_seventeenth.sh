@@ -4,6 +4,7 @@
 #   bash benchmarks/gpu_sixteenth.sh modes_a        (loop / blocks / switch on room, thin)
 #   bash benchmarks/gpu_sixteenth.sh modes_b        (foliage, glass, terrain)
 #   bash benchmarks/gpu_seventeenth.sh glass profile
+#   bash benchmarks/gpu_seventeenth.sh glass2 reference profile
 # glass: every pipeline on glass, this checkout against v16 (fd3a891): the transparent pass's
 #   front test, work list and composite now read the fragment list's filled prefix only
 #   (`transparency.front_work`, `composite` through `sorting.on_prefix`); glass fills about 15%
@@ -12,6 +13,13 @@
 #   still spans the whole list). Forward on room and foliage against v15 too (the sixteenth
 #   session's replay over the prefix), with deferred on room as the control.
 # profile: object space on glass, kernel by kernel, to see what its 8.4 ms are.
+# glass2 (after the first call, whose glass rows showed the composite on the prefix compiling
+#   deferred 7 s longer): this checkout, .v/sort_prefix_only (the composite over the whole
+#   list, its sort alone on the prefix, as in v16) and v16, all under JAXRENDER_DISPATCH=blocks
+#   (this checkout's new default). Object space now compacts its transparent samples to one
+#   per pixel (glass: about 0.6 in front per pixel): prediction 3-4 ms less on glass, about
+#   the transparent_marking, mark_allocate and resolve time over the 8.3M-entry list.
+# reference: the 64-sample reference on glass, 4 frames, this checkout against v16.
 . "$(dirname "$0")/gpu_env.sh"
 S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 16"
 for part in "$@"; do
@@ -27,6 +35,21 @@ for part in "$@"; do
       PYTHONPATH=$R:/tmp/site timeout -k 5 120 $S --rounds 5 --scenes room foliage \
         --pipelines forward deferred 2>&1 | quiet | grep '^{' \
         | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/forward.jsonl"
+    done
+  elif [ "$part" = glass2 ]; then
+    for t in after sort_prefix_only v16; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 150 $S --rounds 5 \
+        --scenes glass --pipelines forward deferred visbuffer checkerboard dacs object_space \
+        2>&1 | quiet | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/glass2.jsonl"
+    done
+  elif [ "$part" = reference ]; then
+    for t in after v16; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 100 python3 \
+        benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 4 \
+        --rounds 3 --scenes glass --pipelines reference 2>&1 | quiet | grep '^{' \
+        | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/reference.jsonl"
     done
   elif [ "$part" = profile ]; then
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py \
