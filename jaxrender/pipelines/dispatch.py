@@ -95,9 +95,8 @@ class WorkList:
 LAUNCH_MODES = ("loop", "blocks", "switch", "binary")
 ENV_LAUNCH = "JAXRENDER_DISPATCH"
 BLOCK = 4  # chunks in one launch of the blocks mode
-# The default: as fast as the loop or faster on 30 of 34 pipeline/scene rows on an H200, for
-# about 20% more compile time; the switch is faster still on a few but compiles twice as long
-# and can launch twice a list's lanes (RESULTS.md, seventeenth session).
+# The default: about a quarter of the loop's host reads for the same lanes, and two compiled
+# launch sizes against the switch's five or six (timings: RESULTS.md, seventeenth session).
 DEFAULT_LAUNCH = "blocks"
 
 

@@ -25,11 +25,11 @@ import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
-from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.base import BlendingConfig, poison_on_overflow
 from jaxrender.pipelines.os_alloc import allocate
-from jaxrender.pipelines.os_budget import budget_counts, check_config, feedback_allocate
-from jaxrender.pipelines.os_marking import footprint, mark_chunks, needed_shadels, taps
-from jaxrender.pipelines.os_memory import memory_counts
+from jaxrender.pipelines.os_budget import check_config, feedback_allocate
+from jaxrender.pipelines.os_counts import frame_counts
+from jaxrender.pipelines.os_marking import footprint
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet, build_sheet
 from jaxrender.pipelines.registry import REGISTRY, register
 from jaxrender.pipelines.vertex_work import vertex_counts
@@ -37,12 +37,11 @@ from jaxrender.pipelines.os_transparency import (blend_layers, merge_os_counts,
                                                  over_transparent_samples, pixel_rows,
                                                  transparent_shadels)
 from jaxrender.pipelines.visibility import share_visibility, visibility
-from jaxrender.pipelines.waves import check_wave_size, count_waves
+from jaxrender.pipelines.waves import check_wave_size
 from jaxrender.shading import shade, surface_points
 from jaxrender.types import Array, Frame, pytree_dataclass
 
 FILTERS = ("bilinear", "trilinear")
-SHADEL_BYTES = 12  # float32 RGB per shadel in the store
 
 
 @dataclass(frozen=True)
@@ -311,7 +310,7 @@ def shade_and_resolve(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig,
     with jax.named_scope("counts"):
         pix_res = res if blended is None else res._replace(
             al=res.al._replace(taps=pixel_rows(res.al.taps, n_pix)))
-        counts, aux = _counts(scene, sheet, cfg, fp, pix_res, work, out, vis)
+        counts, aux = frame_counts(scene, sheet, cfg, fp, pix_res, work, out, vis)
         if blended is not None:
             counts = merge_os_counts(counts, layered, transparent_shadels(
                 scene, sheet, res.al.slot_chunk, work))
@@ -321,68 +320,6 @@ def shade_and_resolve(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig,
                            jnp.where(shade_frame, camera.eye, state.eye).astype(jnp.float32),
                            None if res.budget is None else res.budget.next_bias)
     return Frame(image, counts, share_visibility(aux, vis, cfg)), new_state
-
-
-def _counts(scene, sheet, cfg, fp, res: Residency, work: dispatch.WorkList, out: Resolved, vis):
-    w, h = cfg.width, cfg.height
-    nc = sheet.n_chunks
-    al, owned_slot, reused = res.al, res.owned_slot, res.reused
-    t = al.taps
-    covered = jnp.sum(fp.covered, dtype=jnp.int32)
-    needed, owned, row_of = needed_shadels(sheet, al.taps, al.page, owned_slot)
-    need_n = jnp.sum(needed, axis=1, dtype=jnp.int32)
-    own_n = jnp.sum(owned, axis=1, dtype=jnp.int32)
-    alloc_shadels = jnp.sum(owned_slot, dtype=jnp.int32)
-    alloc_lanes = al.n_alloc * LANES
-    shaded_chunk = (jnp.arange(owned_slot.shape[0]) < al.n_alloc) & ~reused
-    chunks_shaded = jnp.sum(shaded_chunk, dtype=jnp.int32)
-    inv = work.invocations
-    # A shaded chunk launches all its 64 lanes (the unowned shadels idle).
-    waves, util = count_waves(jnp.where(shaded_chunk, LANES, 0), cfg.wave_size, inv)
-    finest = jnp.sum(mark_chunks(taps(fp, sheet, al.bias, "finest", cfg.aniso_taps), nc),
-                     dtype=jnp.int32)
-    taps_read = jnp.sum(t.weight > 0.0, dtype=jnp.int32)
-    f32 = lambda x: jnp.asarray(x).astype(jnp.float32)  # noqa: E731
-    counts = make_counts(
-        shade_invocations=inv,
-        helper_lanes=chunks_shaded * LANES - inv,
-        covered_pixels=covered,
-        waves=waves,
-        lane_utilization=util,
-        bytes_intermediate=(inv + jnp.sum(reused, dtype=jnp.int32) * LANES + taps_read)
-        * SHADEL_BYTES,
-        shadels_shaded=inv,
-        shadels_allocated=alloc_shadels,
-        shadels_per_pixel=f32(alloc_shadels) / jnp.maximum(f32(covered), 1.0),
-        shadels_needed=jnp.sum(needed, dtype=jnp.int32),
-        chunk_fill=f32(jnp.sum(needed, dtype=jnp.int32)) / jnp.maximum(f32(alloc_lanes), 1.0),
-        chunks_marked=jnp.sum(al.marked, dtype=jnp.int32),
-        chunks_allocated=al.n_alloc,
-        chunks_shaded=chunks_shaded,
-        chunks_reused=jnp.sum(reused, dtype=jnp.int32),
-        store_capacity_shadels=jnp.int32(cfg.store_chunks * LANES),
-        store_bytes=jnp.float32(cfg.store_chunks * LANES * SHADEL_BYTES),  # may pass 2^31
-        store_bytes_used=f32(alloc_lanes) * SHADEL_BYTES,
-        mip_bias=al.bias,
-        mip_bias_steps=al.bias_steps,
-        trilinear_overhead=f32(al.n_alloc) / jnp.maximum(f32(finest), 1.0),
-        mip_chain_memory=jnp.float32(sheet.n_chunks / max(sheet.level0_chunks, 1)),
-        missing_taps=out.missing,
-        unowned_taps=out.unowned,
-        alpha_invocations=vis.counts["alpha_invocations"],
-        overflow=out.overflow,
-        **memory_counts(sheet, al.page, al.slot_chunk),
-        **({} if res.budget is None else budget_counts(res.budget)),
-    )
-    # Oxide's marking view: per pixel, the chunk its heaviest tap reads: 1 hit, 2 fully visible
-    # (every owned shadel of the chunk is needed).
-    k = jnp.argmax(t.weight, axis=1)
-    v = jnp.take_along_axis(t.chunk, k[:, None], axis=1)[:, 0]
-    full = (need_n == own_n) & (own_n > 0)
-    state = jnp.where(fp.covered, jnp.where(row_of(full, v), 2, 1), 0).astype(jnp.int32)
-    aux = {"chunk_state": state.reshape(h, w), "mip_level": t.lod.reshape(h, w),
-           "object": jnp.where(fp.covered, fp.obj, -1).reshape(h, w)}
-    return counts, aux
 
 
 # ---------------------------------------------------------------- the registered pipeline
