@@ -171,14 +171,18 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
     h, w = image.shape[:2]
     with jax.named_scope("transparent"):
         clip = clip_vertices(scene, camera, cfg)
-        fr = transparent_fragments(scene, clip, cfg)
-        front, work = front_work(fr, opaque_depth.reshape(-1), w * h)
+        with jax.named_scope("fragments"):
+            fr = transparent_fragments(scene, clip, cfg)
+        with jax.named_scope("front"):
+            front, work = front_work(fr, opaque_depth.reshape(-1), w * h)
 
         def points_of(items):
             return points_at(scene, camera, clip, cfg, fr.tri[items], fr.pixel[items])
 
-        layers, work = shade_layers(scene, camera, fr, front, work, points_of, cfg.chunk)
-        out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
+        with jax.named_scope("layer_shading"):
+            layers, work = shade_layers(scene, camera, fr, front, work, points_of, cfg.chunk)
+        with jax.named_scope("composite"):
+            out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts["transparent_invocations"] = work.invocations
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return out.reshape(h, w, 3), counts
