@@ -12,7 +12,8 @@
 #   visbuffer, checkerboard, DACS and TADS on glass; object space less (its joined footprint
 #   still spans the whole list). Forward on room and foliage against v15 too (the sixteenth
 #   session's replay over the prefix), with deferred on room as the control.
-# profile: object space, then deferred, on glass, kernel by kernel, by named scope.
+# profile: object space, then deferred, on glass, kernel by kernel, by named scope; forward on
+#   room.
 # glass2 (after the first call, whose glass rows showed the composite on the prefix compiling
 #   deferred 7 s longer): this checkout, .v/sort_prefix_only (the composite over the whole
 #   list, its sort alone on the prefix, as in v16) and v16, all under JAXRENDER_DISPATCH=blocks
@@ -61,6 +62,9 @@ for part in "$@"; do
       --scope lighting --scope transparent --scope fragments --scope front \
       --scope layer_shading --scope composite --scope sorted_blend 2>&1 | quiet \
       | tee -a "$OUT/profile.md"
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py \
+      forward --scene room --top 12 --calls 2 --scope fragments --scope depth_test --scope quads \
+      --scope shade --scope resolve --scope counts 2>&1 | quiet | tee -a "$OUT/profile.md"
   fi
 done
 exit 0
