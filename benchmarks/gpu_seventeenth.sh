@@ -41,7 +41,7 @@ for part in "$@"; do
     for t in after sort_prefix_only v16; do
       if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
       JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 150 $S --rounds 5 \
-        --scenes glass --pipelines forward deferred visbuffer checkerboard dacs object_space \
+        --scenes glass --pipelines deferred visbuffer dacs object_space \
         2>&1 | quiet | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/glass2.jsonl"
     done
   elif [ "$part" = reference ]; then
