@@ -14,6 +14,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines import make_config, program
 from jaxrender.pipelines.registry import get_pipeline
 from jaxrender.study import shader_cost
@@ -54,6 +55,7 @@ def _render(pipeline: str, scene, calls: list):
 
 
 def test_half_the_points_half_the_layer_evaluations(monkeypatch):
+    monkeypatch.delenv(dispatch.ENV_LAUNCH, raising=False)  # the default: exact lanes
     calls = _counted(monkeypatch)
     scene = shapes_scene()  # covers every pixel
     try:
@@ -65,14 +67,17 @@ def test_half_the_points_half_the_layer_evaluations(monkeypatch):
     inv_full = int(full.counts["shade_invocations"])
     inv_half = int(half.counts["shade_invocations"])
     assert inv_full == W * H and inv_half == W * H // 2, (inv_full, inv_half)
-    # Deferred at cost 0: one layer per chunk; the live lanes are its invocations.
-    assert len(full_calls) == -(-inv_full // CHUNK), full_calls
+    # Deferred at cost 0: one layer evaluation per launch (of one chunk, or of a block of them
+    # in the default launch mode), over whole chunks; the live lanes are its invocations.
+    full_lanes = sum(lanes for lanes, _ in full_calls)
+    assert all(lanes % CHUNK == 0 for lanes, _ in full_calls), full_calls
+    assert full_lanes == -(-inv_full // CHUNK) * CHUNK, full_calls
     assert sum(live for _, live in full_calls) == inv_full
-    assert sum(lanes for lanes, _ in full_calls) == len(full_calls) * CHUNK
-    # Checkerboard at cost 3: half the chunks, each running its layer 1 + 3 times.
+    # Checkerboard at cost 3: half the chunks, each launch running its layer 1 + 3 times.
     chunks_half = -(-inv_half // CHUNK)
-    assert len(half_calls) == chunks_half * (1 + COST), (len(half_calls), chunks_half)
+    half_lanes = sum(lanes for lanes, _ in half_calls)
+    assert half_lanes == chunks_half * CHUNK * (1 + COST), (half_lanes, chunks_half)
     live_evals = sum(live for _, live in half_calls)
     assert live_evals == shader_cost.shading_work(inv_half, COST), live_evals
-    np.testing.assert_equal(2 * chunks_half * CHUNK, -(-inv_full // CHUNK) * CHUNK,
+    np.testing.assert_equal(2 * half_lanes // (1 + COST), full_lanes,
                             err_msg="checkerboard launches half deferred's lanes per layer")
