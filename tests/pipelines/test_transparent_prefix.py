@@ -1,0 +1,79 @@
+"""The transparent pass reads only its fragment list's filled prefix: the front test and its
+work list (``front_work``) against NumPy over the whole list, and the composite with ``live``
+against the composite of the whole list, on random lists whose counts fall on both sides of the
+prefix lengths."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrender.pipelines.transparency import (BlendSettings, Layers, composite, composite_list,
+                                              front_work)
+from jaxrender.raster.fragments import Fragments
+from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
+from tests.pipelines.transparent_scenes import layered_quads, THREE
+
+N_PIX = 64
+N = 1200  # list capacity: prefix lengths 150, 225, 300, 450, 600, 900, 1200
+COUNTS = [0, 1, 150, 151, 599, 901, 1200]
+
+
+def _fragments(count: int, rng) -> Fragments:
+    """A list of ``count`` fragments (pixel, triangle, depth), the entries past it empty as the
+    rasterizer leaves them (invalid)."""
+    live = np.arange(N) < count
+    return Fragments(
+        pixel=jnp.asarray(np.where(live, rng.integers(0, N_PIX, N), 0), jnp.int32),
+        tri=jnp.asarray(np.where(live, rng.integers(1, 4, N), 0), jnp.int32),
+        depth=jnp.asarray(np.where(live, rng.random(N), 0.0), jnp.float32),
+        valid=jnp.asarray(live),
+        count=jnp.int32(count))
+
+
+@pytest.mark.parametrize("count", COUNTS)
+def test_front_work_lists_the_fragments_in_front_of_the_opaque_depth(count):
+    rng = np.random.default_rng(count)
+    fr = _fragments(count, rng)
+    opaque = rng.random(N_PIX).astype(np.float32)
+    front, work = front_work(fr, jnp.asarray(opaque), N_PIX)
+    pixel, depth = np.asarray(fr.pixel), np.asarray(fr.depth)
+    want = (np.arange(N) < count) & (depth < opaque[pixel])
+    np.testing.assert_array_equal(np.asarray(front), want, err_msg=f"front, count {count}")
+    assert int(work.count) == want.sum(), (int(work.count), want.sum())
+    items = np.asarray(work.items)
+    np.testing.assert_array_equal(items[:want.sum()], np.flatnonzero(want),
+                                  err_msg=f"work list, count {count}")
+    np.testing.assert_array_equal(items[want.sum():], 0, err_msg="padding")
+
+
+@pytest.mark.parametrize("settings", [BlendSettings(), BlendSettings(layers=2),
+                                      BlendSettings(order="submission"),
+                                      BlendSettings(oit="weighted")],
+                         ids=["sorted", "two_layers", "submission", "weighted"])
+@pytest.mark.parametrize("count", COUNTS)
+def test_the_composite_of_the_filled_prefix_is_that_of_the_whole_list(count, settings):
+    # Triangles 1-3 of the three-quad scene: over, additive and over materials.
+    scene = layered_quads(THREE)
+    modes = np.asarray(scene.materials.blend)[np.asarray(scene.tri_material)]
+    assert {BLEND_OVER, BLEND_ADDITIVE} <= set(modes[[2, 4, 6]].tolist())
+    rng = np.random.default_rng(count + 7)
+    fr = _fragments(count, rng)
+    tri = jnp.asarray(np.where(np.arange(N) < count, rng.choice([2, 4, 6], N), 0), jnp.int32)
+    front = fr.valid & jnp.asarray(rng.random(N) < 0.8)
+    values = jnp.asarray(rng.random((N, 5)), jnp.float32)
+    background = jnp.asarray(rng.random((N_PIX, 3)), jnp.float32)
+    whole = Layers(fr.pixel, tri, fr.depth, front, values)
+    want_image, want_counts = composite_list(scene, whole, background, settings)
+    got_image, got_counts = composite(scene, whole._replace(live=jnp.int32(count)), background,
+                                      settings)
+    # The sorted composite blends each pixel's layers in one order: equal bit for bit. The
+    # weighted one sums them, and XLA may fuse the branch's sums differently: a few ulp.
+    rtol = 1e-6 if settings.oit == "weighted" else 0.0
+    np.testing.assert_allclose(np.asarray(got_image), np.asarray(want_image), rtol=rtol, atol=0,
+                               err_msg=f"image, count {count}, {settings}")
+    for k, v in want_counts.items():
+        np.testing.assert_array_equal(np.asarray(got_counts[k]), np.asarray(v),
+                                      err_msg=f"{k}, count {count}, {settings}")
+    assert int(want_counts["transparent_fragments"]) == int(np.asarray(front).sum())
