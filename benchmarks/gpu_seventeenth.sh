@@ -5,6 +5,7 @@
 #   bash benchmarks/gpu_sixteenth.sh modes_b        (foliage, glass, terrain)
 #   bash benchmarks/gpu_seventeenth.sh glass profile
 #   bash benchmarks/gpu_seventeenth.sh glass2 reference profile
+#   bash benchmarks/gpu_seventeenth.sh os        (the device time left: object space alone)
 # glass: every pipeline on glass, this checkout against v16 (fd3a891): the transparent pass's
 #   front test, work list and composite now read the fragment list's filled prefix only
 #   (`transparency.front_work`, `composite` through `sorting.on_prefix`); glass fills about 15%
@@ -43,6 +44,14 @@ for part in "$@"; do
       JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 150 $S --rounds 5 \
         --scenes glass --pipelines deferred visbuffer dacs object_space \
         2>&1 | quiet | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/glass2.jsonl"
+    done
+  elif [ "$part" = os ]; then
+    for t in after v16; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 70 python3 \
+        benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 8 \
+        --rounds 3 --scenes glass --pipelines object_space 2>&1 | quiet | grep '^{' \
+        | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/os.jsonl"
     done
   elif [ "$part" = reference ]; then
     for t in after v16; do
