@@ -23,44 +23,33 @@
 #   the transparent_marking, mark_allocate and resolve time over the 8.3M-entry list.
 # reference: the 64-sample reference on glass, 4 frames, this checkout against v16.
 . "$(dirname "$0")/gpu_env.sh"
-S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 16"
+B="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+# trees FILE SECONDS "TREE ..." BENCH-ARGS...: the bench in each tree (after: this checkout,
+# else .v/TREE), its rows tagged with the tree and appended to $OUT/FILE.
+trees() {
+  local file=$1 limit=$2 names=$3 t R
+  shift 3
+  for t in $names; do
+    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $B "$@" 2>&1 | quiet | grep '^{' \
+      | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/$file"
+  done
+}
 for part in "$@"; do
   if [ "$part" = glass ]; then
-    for t in after v16; do
-      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      PYTHONPATH=$R:/tmp/site timeout -k 5 200 $S --rounds 5 --scenes glass \
-        --pipelines forward deferred visbuffer checkerboard dacs object_space 2>&1 | quiet \
-        | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/glass.jsonl"
-    done
-    for t in after v15; do
-      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      PYTHONPATH=$R:/tmp/site timeout -k 5 120 $S --rounds 5 --scenes room foliage \
-        --pipelines forward deferred 2>&1 | quiet | grep '^{' \
-        | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/forward.jsonl"
-    done
+    trees glass.jsonl 200 "after v16" --frames 16 --rounds 5 --scenes glass \
+      --pipelines forward deferred visbuffer checkerboard dacs object_space
+    trees forward.jsonl 120 "after v15" --frames 16 --rounds 5 --scenes room foliage \
+      --pipelines forward deferred
   elif [ "$part" = glass2 ]; then
-    for t in after sort_prefix_only v16; do
-      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 150 $S --rounds 5 \
-        --scenes glass --pipelines deferred visbuffer dacs object_space \
-        2>&1 | quiet | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/glass2.jsonl"
-    done
+    JAXRENDER_DISPATCH=blocks trees glass2.jsonl 150 "after sort_prefix_only v16" --frames 16 \
+      --rounds 5 --scenes glass --pipelines deferred visbuffer dacs object_space
   elif [ "$part" = os ]; then
-    for t in after v16; do
-      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 70 python3 \
-        benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 8 \
-        --rounds 3 --scenes glass --pipelines object_space 2>&1 | quiet | grep '^{' \
-        | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/os.jsonl"
-    done
+    JAXRENDER_DISPATCH=blocks trees os.jsonl 70 "after v16" --frames 8 --rounds 3 \
+      --scenes glass --pipelines object_space
   elif [ "$part" = reference ]; then
-    for t in after v16; do
-      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      JAXRENDER_DISPATCH=blocks PYTHONPATH=$R:/tmp/site timeout -k 5 100 python3 \
-        benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 4 \
-        --rounds 3 --scenes glass --pipelines reference 2>&1 | quiet | grep '^{' \
-        | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/reference.jsonl"
-    done
+    JAXRENDER_DISPATCH=blocks trees reference.jsonl 100 "after v16" --frames 4 --rounds 3 \
+      --scenes glass --pipelines reference
   elif [ "$part" = profile ]; then
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py \
       object_space --scene glass --top 16 --calls 2 --scope visibility --scope transparent_marking \
