@@ -114,15 +114,11 @@ class Layers(NamedTuple):
     live: Array | None = None
 
 
-def in_front(fr, opaque_depth: Array, n_pix: int) -> Array:
-    """bool[F]: listed fragments strictly in front of the opaque depth float32[P] (GL_LESS
-    against the opaque pass's depth buffer, no depth write)."""
-    return listed_in_front(fr.valid, fr.pixel, fr.depth, opaque_depth, n_pix)
-
-
-def listed_in_front(valid: Array, pixel: Array, depth: Array, opaque_depth: Array,
-                    n_pix: int) -> Array:
-    """``in_front`` of a list's columns."""
+def in_front(valid: Array, pixel: Array, depth: Array, opaque_depth: Array,
+             n_pix: int) -> Array:
+    """bool[F]: a fragment list's entries (its columns ``valid``, ``pixel``, ``depth``)
+    strictly in front of the opaque depth float32[P] (GL_LESS against the opaque pass's depth
+    buffer, no depth write)."""
     z = opaque_depth.at[jnp.where(valid, pixel, n_pix)].get(mode="fill", fill_value=0.0)
     return valid & (depth < z)
 
@@ -138,7 +134,7 @@ def front_work(fr, opaque_depth: Array, n_pix: int) -> tuple[Array, dispatch.Wor
     """(``in_front``, those fragments as one compacted work list), both read off the fragment
     list's filled prefix only (``on_prefix``)."""
     def on_filled(part, depth):
-        front = listed_in_front(*part, depth, n_pix)
+        front = in_front(*part, depth, n_pix)
         items, count = compact_indices(front, front.shape[0])
         return (front, items), count
 
@@ -323,7 +319,7 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
 
 __all__ = ["BlendSettings", "check_settings", "composite", "composite_list", "forward_blend",
            "forward_front", "forward_split", "front_work", "in_front", "LAYER_BYTES",
-           "layer_shader", "Layers", "listed_in_front", "live_fragments", "merge_counts",
+           "layer_shader", "Layers", "live_fragments", "merge_counts",
            "refuse_transparency", "sample_pass", "settings_of", "shade_layers",
            "sorted_composite", "transparent_fragments", "transparent_pass", "wboit_weight",
            "weighted_composite"]
