@@ -1,6 +1,7 @@
 # Sourced by the device-call scripts: the checkout's root as the working folder, the carried
 # wheels (.whl/: trimesh, colour-science, xatlas) installed into /tmp/site, unbuffered output,
-# no GPU preallocation, and quiet() to drop XLA's log lines.
+# no GPU preallocation, quiet() to drop XLA's log lines, and trees() to run the sequence bench
+# in several trees side by side.
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
@@ -9,3 +10,15 @@ python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upg
   --target /tmp/site .whl/*.whl || exit 1
 export PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 quiet() { grep -v "^WARNING\|^I0000\|^E0000\|^W0000"; }
+B="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+# trees FILE SECONDS "TREE ..." BENCH-ARGS...: the bench in each tree (after: this checkout,
+# else .v/TREE), its rows tagged with the tree and appended to $OUT/FILE.
+trees() {
+  local file=$1 limit=$2 names=$3 t R
+  shift 3
+  for t in $names; do
+    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $B "$@" 2>&1 | quiet | grep '^{' \
+      | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/$file"
+  done
+}

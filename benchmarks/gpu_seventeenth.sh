@@ -23,18 +23,6 @@
 #   the transparent_marking, mark_allocate and resolve time over the 8.3M-entry list.
 # reference: the 64-sample reference on glass, 4 frames, this checkout against v16.
 . "$(dirname "$0")/gpu_env.sh"
-B="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
-# trees FILE SECONDS "TREE ..." BENCH-ARGS...: the bench in each tree (after: this checkout,
-# else .v/TREE), its rows tagged with the tree and appended to $OUT/FILE.
-trees() {
-  local file=$1 limit=$2 names=$3 t R
-  shift 3
-  for t in $names; do
-    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $B "$@" 2>&1 | quiet | grep '^{' \
-      | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/$file"
-  done
-}
 for part in "$@"; do
   if [ "$part" = glass ]; then
     trees glass.jsonl 200 "after v16" --frames 16 --rounds 5 --scenes glass \
