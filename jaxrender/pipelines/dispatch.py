@@ -247,22 +247,27 @@ def dispatch_lanes(
     return out, WorkList(jnp.zeros((0,), jnp.int32), n, wrote, chunk, launched)
 
 
+DENSE_TIERS = (2,)  # the reference's passes: compacted into half the lanes, or in place
+
+
 def shade_dense(
     active: Array,
     points_of: Callable[[Array], object],
     shade_fn: Callable[[object], Array],
     out: Array,
+    tiers: tuple[int, ...] = DENSE_TIERS,
 ) -> tuple[Array, WorkList]:
-    """``shade`` of the True entries of bool[N] ``active`` in one launch, for lists that often
-    fill most of their launch (the reference's samples, 64 screens a frame): at most half
-    active, they are compacted into a launch of N // 2 lanes and scattered back; more, every
-    entry runs in place, inactive lanes idle, which spares the compaction and the scatter
-    where they would cost more than the idle lanes (on an H200 the reference's room, 90%
-    covered, is 3% slower compacted, foliage, 37% covered, 17% faster). Nothing is launched
-    for an empty list. Counts: ``count`` and ``invocations`` the active entries, one launch,
-    its lanes in ``lanes``."""
+    """``shade`` of the True entries of bool[N] ``active`` in one launch (one host read), for
+    lists that often fill most of their launch (the reference's samples, 64 screens a frame): the
+    active entries compacted into the smallest launch of N // d lanes (d in ``tiers``) that
+    holds them, and scattered back; past N // min(tiers), every entry runs in place, inactive
+    lanes idle, which spares the compaction and the scatter where they would cost more than the
+    idle lanes (on an H200 the reference's room, 90% covered, is 3% slower compacted into half,
+    foliage, 37% covered, 17% faster). Each tier is one more copy of the shader compiled.
+    Nothing is launched for an empty list. Counts: ``count`` and ``invocations`` the active
+    entries, one launch, its lanes in ``lanes``."""
     n = active.shape[0]
-    half = n // 2
+    sizes = sorted({n // d for d in tiers if n // d > 0})
     count = jnp.sum(active, dtype=jnp.int32)
 
     def in_place(acc):
@@ -272,16 +277,20 @@ def shade_dense(
         keep = active.reshape(active.shape + (1,) * (vals.ndim - 1))
         return jnp.where(keep, vals.astype(acc.dtype), acc)
 
-    def compacted(acc):
-        items, _ = compact_indices(active, half)
-        live = jnp.arange(half, dtype=jnp.int32) < count
-        pts = points_of(items)
-        pts = dataclasses.replace(pts, valid=pts.valid & live)
-        vals = shade_fn(pts).astype(acc.dtype)
-        return acc.at[jnp.where(live, items, n)].set(vals, mode="drop", unique_indices=True)
+    def compacted(size: int):
+        def launch(acc):
+            items, _ = compact_indices(active, size)
+            live = jnp.arange(size, dtype=jnp.int32) < count
+            pts = points_of(items)
+            pts = dataclasses.replace(pts, valid=pts.valid & live)
+            vals = shade_fn(pts).astype(acc.dtype)
+            return acc.at[jnp.where(live, items, n)].set(vals, mode="drop", unique_indices=True)
+        return launch
 
-    which = jnp.where(count == 0, 0, jnp.where(count <= half, 1, 2))
-    out = jax.lax.switch(which, [lambda acc: acc, compacted, in_place], out)
-    lanes = jnp.where(which == 0, 0, jnp.where(which == 1, half, n)).astype(jnp.int32)
+    # 0: nothing; 1 + i: the i-th size; 1 + len(sizes): in place.
+    which = jnp.where(count == 0, 0, 1 + sum((count > m).astype(jnp.int32) for m in sizes))
+    out = jax.lax.switch(which, [lambda acc: acc] + [compacted(m) for m in sizes] + [in_place],
+                         out)
+    lanes = jnp.asarray([0] + sizes + [n], jnp.int32)[which]
     items = jnp.zeros((0,), jnp.int32)
     return out, WorkList(items, count, count, n, (count > 0).astype(jnp.int32), lanes)

@@ -150,10 +150,12 @@ def test_packed_segmented_cummin_equals_the_scan(rng):
                                       err_msg=f"{fn.__name__} of three columns")
 
 
-@pytest.mark.parametrize("n_active", [0, 1, 149, 150, 151, 300])
-def test_the_dense_launch_compacts_at_most_half_and_runs_more_in_place(rng, n_active):
-    """One launch: the active entries compacted into half the lanes while they fit, every
-    entry in place past that, nothing for none; the same values either way."""
+@pytest.mark.parametrize("tiers, n_active", [((2,), n) for n in (0, 1, 149, 150, 151, 300)]
+                         + [((8, 4, 2), n) for n in (1, 37, 38, 74, 75, 76, 150, 151)])
+def test_the_dense_launch_compacts_into_its_tiers_and_runs_more_in_place(rng, tiers, n_active):
+    """One launch: the active entries compacted into the smallest tier (300 // d lanes) that
+    holds them, every entry in place past the largest, nothing for none; the same values
+    either way."""
     import dataclasses
 
     @dataclasses.dataclass
@@ -166,12 +168,13 @@ def test_the_dense_launch_compacts_at_most_half_and_runs_more_in_place(rng, n_ac
     points_of = lambda items: Points(items, jnp.ones(items.shape, bool))  # noqa: E731
     shade_fn = lambda p: jnp.where(p.valid, p.index.astype(jnp.float32) * 2 + 1, 0.0)  # noqa
     out, done = dispatch.shade_dense(jnp.asarray(active), points_of, shade_fn,
-                                     jnp.full((300,), -1.0, jnp.float32))
+                                     jnp.full((300,), -1.0, jnp.float32), tiers)
     np.testing.assert_array_equal(np.asarray(out), np.where(active, np.arange(300) * 2.0 + 1.0,
-                                                            -1.0), err_msg=str(n_active))
-    lanes = 0 if n_active == 0 else 150 if n_active <= 150 else 300
+                                                            -1.0), err_msg=f"{tiers} {n_active}")
+    sizes = sorted(300 // d for d in tiers)  # 37, 75, 150 for (8, 4, 2)
+    lanes = 0 if n_active == 0 else next((m for m in sizes if n_active <= m), 300)
     assert (int(done.invocations), int(done.chunks), int(done.lanes)) == (
-        n_active, int(n_active > 0), lanes)
+        n_active, int(n_active > 0), lanes), (tiers, n_active)
 
 
 @pytest.mark.parametrize("pipeline", ["forward", "deferred", "visbuffer", "checkerboard",
