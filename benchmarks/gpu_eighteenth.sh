@@ -10,6 +10,8 @@
 #   and five or six shader copies). Prediction: room 2.8 -> 2.3-2.4 ms (the switch's 2.38 last
 #   session, 14 reads fewer), the other scenes as the switch did (foliage 1.71 -> 1.53, thin,
 #   glass and terrain within 0.1 ms), compile as blocks' plus two shader copies.
+#   The same for checkerboard (.v/dense_checker: its half-screen list in one launch, 1 read
+#   instead of 4 on room): prediction 0.05-0.1 ms less.
 # Any other part goes to gpu_seventeenth.sh (os, glass, glass2, profile, reference).
 . "$(dirname "$0")/gpu_env.sh"
 rest=()
@@ -18,6 +20,8 @@ for part in "$@"; do
     D="--frames 16 --rounds 5 --scenes room foliage thin glass terrain --pipelines deferred"
     trees dense.jsonl 150 "after dense_deferred" $D
     JAXRENDER_DISPATCH=switch trees dense_switch.jsonl 150 after $D
+    trees dense_checker.jsonl 150 "after dense_checker" --frames 16 --rounds 5 \
+      --scenes room foliage thin glass terrain --pipelines checkerboard
   else
     rest+=("$part")
   fi
