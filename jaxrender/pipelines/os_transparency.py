@@ -3,11 +3,11 @@
 Every transparent fragment in front of the opaque depth (``transparency.front_work``) is one
 more screen sample of the object-space pipeline: compacted into a list after the pixels, its
 footprint joins theirs, so its filter taps mark the chunks it reads and the allocation places
-them in the store beside the opaque ones; the shadels of transparent triangles are shaded by the same dispatch as all the
-others. In the final pass each such fragment reads the store through its taps, like a pixel,
-takes its opacity from its material there (the texture's alpha at the fragment, as the pass
-samples it) and the layers are composited over the opaque resolve by the shared
-``transparency.composite`` (sorted, or weighted blended OIT).
+them in the store beside the opaque ones; the shadels of transparent triangles are shaded by
+the same dispatch as all the others. In the final pass each such fragment reads the store
+through its taps, like a pixel, takes its opacity from its material there (the texture's alpha
+at the fragment, as the pass samples it) and the layers are composited over the opaque resolve
+by the shared ``transparency.composite`` (sorted, or weighted blended OIT).
 """
 
 from __future__ import annotations
