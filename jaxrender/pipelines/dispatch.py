@@ -266,6 +266,9 @@ def shade_dense(
     foliage, 37% covered, 17% faster). Each tier is one more copy of the shader compiled.
     Nothing is launched for an empty list. Counts: ``count`` and ``invocations`` the active
     entries, one launch, its lanes in ``lanes``."""
+    if any(int(d) < 2 for d in tiers):
+        raise ValueError(f"shade_dense: every tier d launches N // d lanes and must be at least "
+                         f"2 (N lanes run in place past the largest tier), got tiers={tiers!r}")
     n = active.shape[0]
     sizes = sorted({n // d for d in tiers if n // d > 0})
     count = jnp.sum(active, dtype=jnp.int32)

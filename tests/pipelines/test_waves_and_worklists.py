@@ -177,6 +177,13 @@ def test_the_dense_launch_compacts_into_its_tiers_and_runs_more_in_place(rng, ti
         n_active, int(n_active > 0), lanes), (tiers, n_active)
 
 
+@pytest.mark.parametrize("tiers", [(1,), (4, 0)])
+def test_the_dense_launch_refuses_a_tier_below_two(tiers):
+    points_of = lambda items: None  # noqa: E731 - never reached
+    with pytest.raises(ValueError, match=r"must be at least 2 .*got tiers="):
+        dispatch.shade_dense(jnp.ones((8,), bool), points_of, points_of, jnp.zeros((8,)), tiers)
+
+
 @pytest.mark.parametrize("pipeline", ["forward", "deferred", "visbuffer", "checkerboard",
                                       "object_space"])
 def test_every_pipeline_checks_wave_size_one_way(pipeline):
