@@ -54,11 +54,10 @@ class DeferredConfig(BlendingConfig):
 
 
 class LightingPlan(NamedTuple):
-    """Which samples the lighting pass shades: ``work`` (flat sample indices s * P + p) and, per
-    (sample, pixel), ``active`` bool[S, P]; ``covered`` bool[S, P]; per pixel ``rep`` int32[P],
-    its representative sample (its first covered one), and ``pixel_covered`` bool[P]."""
+    """Which samples the lighting pass shades, per (sample, pixel): ``active`` bool[S, P] (flat,
+    sample index s * P + p); ``covered`` bool[S, P]; per pixel ``rep`` int32[P], its
+    representative sample (its first covered one), and ``pixel_covered`` bool[P]."""
 
-    work: dispatch.WorkList
     active: Array
     covered: Array
     rep: Array
@@ -66,15 +65,14 @@ class LightingPlan(NamedTuple):
 
 
 def gbuffer_pass(scene, camera, vis, n_samples: int, cfg):
-    """The attribute pass: every covered sample's G-buffer row, through the chunked dispatch.
+    """The attribute pass: every covered sample's G-buffer row, through ``dispatch.shade_screen``.
     Returns (float32[S * P, GBUFFER_CHANNELS], its WorkList)."""
     n = n_samples * cfg.width * cfg.height
     tri = vis.tri_id.reshape(-1)
     flat = lambda a: a.reshape(n, 3)  # noqa: E731
     bary, ddx, ddy = flat(vis.bary), flat(vis.dbary_dx), flat(vis.dbary_dy)
-    return dispatch.shade(
-        dispatch.WorkList.of(tri >= 0),
-        lambda it: surface_points(scene, camera, tri[it], bary[it], ddx[it], ddy[it]),
+    return dispatch.shade_screen(
+        tri >= 0, lambda it: surface_points(scene, camera, tri[it], bary[it], ddx[it], ddy[it]),
         pack_gbuffer, jnp.zeros((n, GBUFFER_CHANNELS), jnp.float32), cfg.chunk)
 
 
@@ -90,7 +88,7 @@ def lighting_plan(vis, n_samples: int, cfg: DeferredConfig) -> LightingPlan:
     if n_samples > 1 and cfg.per_sample_shading:
         rep_tri = jnp.take_along_axis(tri, rep[None, :], axis=0)
         active = active | (cov & (tri != rep_tri))
-    return LightingPlan(dispatch.WorkList.of(active.reshape(-1)), active, cov, rep, pix_cov)
+    return LightingPlan(active, cov, rep, pix_cov)
 
 
 def resolve_samples(lit: Array, plan: LightingPlan, cfg) -> Array:
@@ -118,8 +116,9 @@ def frame(scene, camera, cfg: DeferredConfig) -> Frame:
     with jax.named_scope("plan"):
         plan = lighting_plan(vis, n_s, cfg)
     with jax.named_scope("lighting"):
-        lit, lighting = dispatch.shade(
-            plan.work, lambda it: unpack_gbuffer(gbuf[it], camera, jnp.ones(it.shape, bool)),
+        lit, lighting = dispatch.shade_screen(
+            plan.active.reshape(-1),
+            lambda it: unpack_gbuffer(gbuf[it], camera, jnp.ones(it.shape, bool)),
             lambda pts: shade(pts, scene), jnp.zeros((gbuf.shape[0], 3), jnp.float32), cfg.chunk)
     with jax.named_scope("resolve"):
         image = resolve_samples(lit, plan, cfg)

@@ -297,3 +297,25 @@ def shade_dense(
     lanes = jnp.asarray([0] + sizes + [n], jnp.int32)[which]
     items = jnp.zeros((0,), jnp.int32)
     return out, WorkList(items, count, count, n, (count > 0).astype(jnp.int32), lanes)
+
+
+# A deferred screen pass fills anything from a tenth of the screen (foliage) to all of it: three
+# compacted sizes keep the idle lanes under half without a host read per chunk (timings:
+# RESULTS.md, nineteenth session).
+SCREEN_TIERS = (8, 4, 2)
+
+
+def shade_screen(
+    active: Array,
+    points_of: Callable[[Array], object],
+    shade_fn: Callable[[object], Array],
+    out: Array,
+    chunk: int = DEFAULT_CHUNK,
+) -> tuple[Array, WorkList]:
+    """``shade`` of the True entries of a screen-sized bool[N] ``active`` (one entry per pixel
+    or sample). With the auto chunk and no ``JAXRENDER_DISPATCH`` set: one ``shade_dense``
+    launch over ``SCREEN_TIERS`` (one host read). With a chunk given, or a launch mode named in
+    ``JAXRENDER_DISPATCH``: the chunked ``shade`` of its work list in that mode."""
+    if int(chunk) == 0 and not os.environ.get(ENV_LAUNCH, "").strip():
+        return shade_dense(active, points_of, shade_fn, out, SCREEN_TIERS)
+    return shade(WorkList.of(active), points_of, shade_fn, out, chunk)

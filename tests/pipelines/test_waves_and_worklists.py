@@ -1,6 +1,8 @@
 """The shared work-list dispatch and wave counts: counts read off the work list, waves against
 a plain loop over groups, and the 8x8-tile grouping against its definition."""
 
+import dataclasses
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -150,24 +152,30 @@ def test_packed_segmented_cummin_equals_the_scan(rng):
                                       err_msg=f"{fn.__name__} of three columns")
 
 
+@dataclasses.dataclass
+class IndexPoints:
+    """The least a shader needs: each lane's flat index and whether it is valid."""
+    index: jnp.ndarray
+    valid: jnp.ndarray
+
+
+def index_points(items):
+    return IndexPoints(items, jnp.ones(items.shape, bool))
+
+
+def odd_of_index(points):
+    return jnp.where(points.valid, points.index.astype(jnp.float32) * 2 + 1, 0.0)
+
+
 @pytest.mark.parametrize("tiers, n_active", [((2,), n) for n in (0, 1, 149, 150, 151, 300)]
                          + [((8, 4, 2), n) for n in (1, 37, 38, 74, 75, 76, 150, 151)])
 def test_the_dense_launch_compacts_into_its_tiers_and_runs_more_in_place(rng, tiers, n_active):
     """One launch: the active entries compacted into the smallest tier (300 // d lanes) that
     holds them, every entry in place past the largest, nothing for none; the same values
     either way."""
-    import dataclasses
-
-    @dataclasses.dataclass
-    class Points:
-        index: jnp.ndarray
-        valid: jnp.ndarray
-
     active = np.zeros(300, bool)
     active[rng.choice(300, n_active, replace=False)] = True
-    points_of = lambda items: Points(items, jnp.ones(items.shape, bool))  # noqa: E731
-    shade_fn = lambda p: jnp.where(p.valid, p.index.astype(jnp.float32) * 2 + 1, 0.0)  # noqa
-    out, done = dispatch.shade_dense(jnp.asarray(active), points_of, shade_fn,
+    out, done = dispatch.shade_dense(jnp.asarray(active), index_points, odd_of_index,
                                      jnp.full((300,), -1.0, jnp.float32), tiers)
     np.testing.assert_array_equal(np.asarray(out), np.where(active, np.arange(300) * 2.0 + 1.0,
                                                             -1.0), err_msg=f"{tiers} {n_active}")
@@ -175,6 +183,31 @@ def test_the_dense_launch_compacts_into_its_tiers_and_runs_more_in_place(rng, ti
     lanes = 0 if n_active == 0 else next((m for m in sizes if n_active <= m), 300)
     assert (int(done.invocations), int(done.chunks), int(done.lanes)) == (
         n_active, int(n_active > 0), lanes), (tiers, n_active)
+
+
+@pytest.mark.parametrize("chunk, env, launches", [
+    (0, "", "dense"), (64, "", "chunked"), (0, "loop", "chunked"), (0, "switch", "chunked")])
+def test_a_screen_pass_is_one_dense_launch_unless_a_chunk_or_mode_is_named(
+        rng, monkeypatch, chunk, env, launches):
+    """Deferred's screen passes: with the auto chunk, one launch over SCREEN_TIERS; a chunk
+    size or a JAXRENDER_DISPATCH mode given puts them back on the chunked dispatch, so that
+    neither setting is accepted and ignored. The values are the same either way."""
+    monkeypatch.setenv(dispatch.ENV_LAUNCH, env)
+    n = 4096 + 300  # auto_chunk's smallest chunk is 4096: two chunks when chunked
+    active = rng.random(n) < 0.2
+    out, done = dispatch.shade_screen(jnp.asarray(active), index_points, odd_of_index,
+                                      jnp.full((n,), -1.0, jnp.float32), chunk)
+    np.testing.assert_array_equal(np.asarray(out), np.where(active, np.arange(n) * 2.0 + 1.0,
+                                                            -1.0), err_msg=f"{chunk} {env!r}")
+    assert int(done.invocations) == int(active.sum()), (chunk, env)
+    if launches == "dense":
+        size = next(n // d for d in sorted(dispatch.SCREEN_TIERS, reverse=True)
+                    if active.sum() <= n // d)
+        assert (int(done.chunks), int(done.lanes)) == (1, size), (chunk, env)
+    else:
+        size = dispatch.resolve_chunk(chunk, n)
+        assert int(done.chunk) == size and int(done.lanes) % size == 0, (chunk, env, done.chunk)
+        assert int(done.lanes) >= int(active.sum()), (chunk, env)
 
 
 @pytest.mark.parametrize("tiers", [(1,), (4, 0)])
