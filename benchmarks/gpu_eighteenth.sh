@@ -12,14 +12,13 @@
 #   glass and terrain within 0.1 ms), compile as blocks' plus two shader copies.
 #   The same for checkerboard (.v/dense_checker: its half-screen list in one launch, 1 read
 #   instead of 4 on room): prediction 0.05-0.1 ms less.
+# The nineteenth session adopted dense_deferred (gpu_nineteenth.sh times it against blocks),
+# so dense now times checkerboard alone.
 # Any other part goes to gpu_seventeenth.sh (os, glass, glass2, profile, reference).
 . "$(dirname "$0")/gpu_env.sh"
 rest=()
 for part in "$@"; do
   if [ "$part" = dense ]; then
-    D="--frames 16 --rounds 5 --scenes room foliage thin glass terrain --pipelines deferred"
-    trees dense.jsonl 150 "after dense_deferred" $D
-    JAXRENDER_DISPATCH=switch trees dense_switch.jsonl 150 after $D
     trees dense_checker.jsonl 150 "after dense_checker" --frames 16 --rounds 5 \
       --scenes room foliage thin glass terrain --pipelines checkerboard
   else
