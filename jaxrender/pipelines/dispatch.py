@@ -299,8 +299,8 @@ def shade_dense(
     return out, WorkList(items, count, count, n, (count > 0).astype(jnp.int32), lanes)
 
 
-# Deferred's screen passes cover from about a third (foliage) to all (terrain) of the built-in
-# scenes' screens: three compacted sizes keep the idle lanes under half of those launched
+# Deferred's screen passes cover from about a third (foliage) to nine tenths (room) of the
+# built-in scenes' screens: three compacted sizes keep the idle lanes under half of those launched
 # above an eighth of the screen, with one host read a pass, not one a chunk (timings:
 # RESULTS.md, nineteenth session).
 SCREEN_TIERS = (8, 4, 2)
