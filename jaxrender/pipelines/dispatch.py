@@ -300,9 +300,9 @@ def shade_dense(
 
 
 # Deferred's screen passes cover from about a third (foliage) to nine tenths (room) of the
-# built-in scenes' screens: three compacted sizes keep the idle lanes under half of those launched
-# above an eighth of the screen, with one host read a pass, not one a chunk (timings:
-# RESULTS.md, nineteenth session).
+# built-in scenes' screens: three compacted sizes keep the idle lanes under half of those
+# launched above an eighth of the screen, with one host read a pass, not one a chunk
+# (timings: RESULTS.md, nineteenth session).
 SCREEN_TIERS = (8, 4, 2)
 
 
