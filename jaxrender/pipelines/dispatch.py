@@ -116,12 +116,17 @@ def launch_mode(default: str = DEFAULT_LAUNCH) -> str:
       one read; up to half the lanes idle (counted in ``lanes``); a size per power of two.
     - binary: one launch per set bit of the chunk count: a read per bit, exactly the loop's
       lanes, a size per bit."""
+    return named_launch_mode() or default
+
+
+def named_launch_mode() -> str:
+    """The launch mode ``JAXRENDER_DISPATCH`` names ("" when unset): it also sends deferred's
+    screen passes back to the chunked dispatch (``shade_screen``), so a program depends on
+    whether a mode is named, not only on the mode in force."""
     said = os.environ.get(ENV_LAUNCH, "").strip().lower()
-    if said:
-        if said not in LAUNCH_MODES:
-            raise ValueError(f"{ENV_LAUNCH}={said!r}: expected one of {', '.join(LAUNCH_MODES)}")
-        return said
-    return default
+    if said and said not in LAUNCH_MODES:
+        raise ValueError(f"{ENV_LAUNCH}={said!r}: expected one of {', '.join(LAUNCH_MODES)}")
+    return said
 
 
 def _launch(n_chunks: Array, max_chunks: int, chunk: int, launch, acc, mode: str):
@@ -317,6 +322,6 @@ def shade_screen(
     or sample). With the auto chunk and no ``JAXRENDER_DISPATCH`` set: one ``shade_dense``
     launch over ``SCREEN_TIERS`` (one host read). With a chunk given, or a launch mode named in
     ``JAXRENDER_DISPATCH``: the chunked ``shade`` of its work list in that mode."""
-    if int(chunk) == 0 and not os.environ.get(ENV_LAUNCH, "").strip():
+    if int(chunk) == 0 and not named_launch_mode():
         return shade_dense(active, points_of, shade_fn, out, SCREEN_TIERS)
     return shade(WorkList.of(active), points_of, shade_fn, out, chunk)

@@ -198,7 +198,7 @@ def _environment() -> dict:
             "device": [dev.platform, dev.device_kind, dev.client.platform_version, dev.id],
             "host": _host() if dev.platform == "cpu" else [],
             "xla_flags": os.environ.get("XLA_FLAGS", ""), "jax_config": options,
-            "launch_mode": dispatch.launch_mode()}
+            "launch_mode": [dispatch.launch_mode(), dispatch.named_launch_mode()]}
 
 
 def program_key(pipe, fixed, args, device=None) -> str | None:

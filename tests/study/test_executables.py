@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from jax.experimental.compilation_cache import compilation_cache as jax_cache
 
-from jaxrender.pipelines import program, registry
+from jaxrender.pipelines import dispatch, program, registry
 from jaxrender.scene.camera import look_at
 from jaxrender.study import compile_cache, executables
 from jaxrender.study.runner import run_study
@@ -102,6 +102,19 @@ def test_key_follows_static_config_and_shapes_not_values(tmp_path, monkeypatch):
     one = executables.program_key(PIPE, fixed, args)
     fixed, args, _ = program.arguments(PIPE, jnp.ones(3), look_at((0, 0.5, 3), (0, 0, 0)), cfg)
     assert len({one, executables.program_key(PIPE, fixed, args), key}) == 3, "dtype, mode"
+
+
+def test_key_follows_a_named_launch_mode(tmp_path, monkeypatch):
+    # Naming the default mode still changes deferred's program (its screen passes go back to
+    # the chunked dispatch), so a stored default program must not be loaded for it.
+    monkeypatch.setenv("JAXRENDER_CACHE", str(tmp_path))
+    monkeypatch.delenv(compile_cache.ENV_CACHE, raising=False)
+    cfg = registry.RenderConfig(width=4, height=2)
+    keys = {}
+    for named in ("", dispatch.DEFAULT_LAUNCH, "loop"):
+        monkeypatch.setenv(dispatch.ENV_LAUNCH, named)
+        keys[named] = _key(cfg, 3)
+    assert len(set(keys.values())) == 3, keys
 
 
 def _compile(cfg):
