@@ -2,7 +2,8 @@
 # Builds the trees that benchmarks/gpu_thirteenth.sh and gpu_fourteenth.sh time side by side:
 # .v/v0 (the code before the thirteenth session, 9a6cd99), .v/v13 (before the fourteenth,
 # c298392), .v/v14 (before the fifteenth, 07b2d0c), .v/v15 (before the sixteenth,
-# 39e025f), .v/v16 (before the seventeenth, fd3a891) and one .v/<name> per patch here (HEAD's
+# 39e025f), .v/v16 (before the seventeenth, fd3a891), .v/v19 (before the twentieth,
+# 424a5fe) and one .v/<name> per patch here (HEAD's
 # jaxrender/ with the patch applied). Run from anywhere; .v/ is rebuilt from scratch.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -16,6 +17,8 @@ mkdir -p .v/v15
 git archive 39e025f jaxrender | tar -x -C .v/v15
 mkdir -p .v/v16
 git archive fd3a891 jaxrender | tar -x -C .v/v16
+mkdir -p .v/v19
+git archive 424a5fe jaxrender | tar -x -C .v/v19
 for p in benchmarks/variants/*.patch; do
   name=$(basename "$p" .patch)
   mkdir -p ".v/$name"

@@ -9,8 +9,10 @@ The plane scenes take the shapes, material kind, lights, name and effects of the
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -110,6 +112,26 @@ def test_too_small_store_raises_bias_and_shades_everything_visible():
     assert np.all(np.isfinite(np.asarray(f.image)))
     assert np.all(np.asarray(f.aux["mip_level"]) == 1.0)
     assert set(np.unique(np.asarray(f.aux["chunk_state"]))) == {2}
+
+
+def test_unowned_taps_count_the_taps_that_read_a_shadel_no_triangle_owns():
+    # The aligned plane (one shadel per pixel, LOD 0): each pixel's one tap of weight 1 reads
+    # the shadel under it, so level 0's 16 chunks are all resident and each of their shadels
+    # is read once. Taking the owner from every other shadel of the first chunk leaves 32
+    # taps reading an unowned shadel, and those shadels are not shaded.
+    scene = plane_scene()
+    cfg = osp.ObjectSpaceConfig(width=W, height=H, sheet_resolution=W)
+    sheet = osp.prepare(scene, cfg)
+    owner = np.asarray(sheet.owner).copy()
+    assert np.all(owner[:16 * LANES] >= 0), "the plane's level 0 should be owned throughout"
+    owner[:LANES:2] = -1
+    holed = dataclasses.replace(sheet, owner=jnp.asarray(owner))
+    frame, _ = osp.frame_step(scene, holed, scene.camera, cfg, osp.empty_state(holed, cfg),
+                              jnp.bool_(True))
+    c = {k: int(np.asarray(v)) for k, v in frame.counts.items()
+         if k in ("unowned_taps", "missing_taps", "overflow", "shade_invocations")}
+    assert c == {"unowned_taps": 32, "missing_taps": 0, "overflow": 0,
+                 "shade_invocations": W * H - 32}, c
 
 
 def test_stripes_are_temporally_stabler_in_object_space_than_deferred():

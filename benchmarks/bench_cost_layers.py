@@ -1,0 +1,90 @@
+"""The shader-cost layers' time per layer evaluation by launch size: is a unit of work the
+same wherever it runs?
+
+    python benchmarks/bench_cost_layers.py --scenes foliage room --sizes 4096 65536 0
+    PYTHONPATH=.v/layer_groups python benchmarks/bench_cost_layers.py --label groups  # a variant
+
+Rasterizes each scene's default view, compacts its covered pixels, and times one launch of
+``surface_points`` and ``shade()`` over the first n of them (0: all) at shader cost 0 and at
+``--cost``. The slope is (t_cost - t_0) / (n x cost): picoseconds per layer evaluation. If the
+GPU is not filled (a few thousand lanes) or the layers' intermediates spill from the cache, a
+pipeline's slope depends on its launch sizes rather than its work.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrender.parsing import resolution_arg
+from jaxrender.pipelines import make_config
+from jaxrender.pipelines.visibility import visibility
+from jaxrender.scene import default_camera
+from jaxrender.shading import load_lit_scene, shade, surface_points
+from jaxrender.study.backend import with_shader_cost
+from jaxrender.timing import device_description, time_call
+
+
+def covered_points(scene, camera, w, h):
+    """(tri_id, bary, dbary_dx, dbary_dy) of the covered pixels, compacted, as NumPy."""
+    cfg = make_config("deferred", width=w, height=h)
+    vis = jax.jit(lambda s, c: visibility(s, c, cfg))(scene, camera)
+    flat = lambda a: np.asarray(a).reshape((w * h,) + np.shape(a)[2:])  # noqa: E731
+    tri = flat(vis.tri_id)
+    keep = np.flatnonzero(tri >= 0)
+    return tuple(flat(a)[keep] for a in (vis.tri_id, vis.bary, vis.dbary_dx, vis.dbary_dy))
+
+
+def time_launch(scene, camera, pts, repeats: int) -> tuple[float, float]:
+    """(median ms, compile s) of one launch shading ``pts``."""
+    import time
+
+    fn = jax.jit(lambda s, c, p: shade(surface_points(s, c, *p), s))
+    t0 = time.perf_counter()
+    call = fn.lower(scene, camera, pts).compile()
+    compile_s = time.perf_counter() - t0
+    _, median, _ = time_call(call, scene, camera, pts, repeats=repeats, warmup=2)
+    return median, compile_s
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", nargs="+", default=["foliage", "room"])
+    ap.add_argument("--sizes", nargs="+", type=int, default=[4096, 65536, 0],
+                    help="lanes per launch; 0: every covered pixel")
+    ap.add_argument("--cost", type=int, default=256)
+    ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
+    ap.add_argument("--repeats", type=int, default=15)
+    ap.add_argument("--out", default="cost_layers.jsonl")
+    ap.add_argument("--label", default="", help="a name for this tree in the rows")
+    a = ap.parse_args(argv)
+    w, h = a.resolution
+    print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)
+    print("| scene | lanes | ms at 0 | ms at cost | ps per layer evaluation | compile s |")
+    print("|---|---:|---:|---:|---:|---:|", flush=True)
+    for name in a.scenes:
+        base = load_lit_scene(name)
+        camera = default_camera(base)
+        pts_all = covered_points(base, camera, w, h)
+        costly = with_shader_cost(base, a.cost)
+        for n in a.sizes:
+            pts = tuple(jnp.asarray(p[:n] if n else p) for p in pts_all)
+            lanes = pts[0].shape[0]
+            t_zero, _ = time_launch(base, camera, pts, a.repeats)
+            t_cost, compile_s = time_launch(costly, camera, pts, a.repeats)
+            ps = (t_cost - t_zero) * 1e9 / (lanes * a.cost)
+            row = dict(scene=name, label=a.label, lanes=lanes, ms_zero=t_zero, ms_cost=t_cost,
+                       cost=a.cost, ps_per_layer=ps, compile_s=compile_s)
+            with open(a.out, "a") as f:
+                f.write(json.dumps(row) + "\n")
+            print(f"| {name} | {lanes} | {t_zero:.3f} | {t_cost:.3f} | {ps:.1f} | {compile_s:.1f} |",
+                  flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
