@@ -21,6 +21,9 @@
 #   sheet's owner map (150 M entries on thin). Prediction: 0.15-0.25 ms a frame less on thin
 #   (the first call's profile: 0.24 ms in one resolve kernel), less elsewhere; then object
 #   space on thin and deferred on room profiled (every kernel over 20 us).
+# os2, os3: the same with the owned bits stored once, and the shading chunk from a quarter
+#   screen. None of the three was adopted (RESULTS.md): "after" in these parts is now this
+#   checkout without them, so rerunning them compares v19 with today's code.
 . "$(dirname "$0")/gpu_env.sh"
 prof() {  # prof PIPELINE SCENE SCOPE...
   local p=$1 s=$2
