@@ -19,6 +19,11 @@ from jaxrender.shading.vec import cross, dot, safe_normalize
 from jaxrender.types import Array, SurfacePoints
 
 LAYER_NUDGE = 1e-3  # radians; the spread of the shader-cost layers' normals
+# The most layer evaluations (layers x lanes) batched at once: XLA stores each layer's
+# intermediates, about 90 bytes a layer and lane for room's shader (CPU memory analysis), so
+# this bounds them near 17 GiB; a 2^17-lane chunk at cost 1024 (the studies' highest) is still
+# one batch. A 1920x1080 screen at cost 1024 in one launch needed 177 GiB.
+LAYER_LANES = 3 << 26
 
 
 def _gather(x: Array, idx: Array) -> Array:
@@ -157,6 +162,30 @@ def _lights(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, alb
     return sum_small(f * e * cos_c, axis=1)
 
 
+def layer_sum(layer, angles: Array, lanes: int) -> Array:
+    """sum_k layer(angles[k]) for a ``layer`` over ``lanes`` points: batched over the layers
+    (vmap), in blocks of as many layers as keep a block's evaluations within LAYER_LANES. All
+    the layers in one block need no loop; more run in a ``fori_loop`` of whole blocks, whose
+    iterations each read back to the host on a GPU (about 27 us) but evaluate over LAYER_LANES
+    / 2 layer-lanes apiece. Each layer is evaluated exactly once: those left over from the
+    last whole block run after the loop."""
+    n_layers = angles.shape[0]
+    block = max(1, LAYER_LANES // max(int(lanes), 1))
+    if n_layers <= block:
+        return jnp.sum(jax.vmap(layer)(angles), axis=0)
+    n_blocks = n_layers // block
+
+    def add_block(i, acc):
+        some = jax.lax.dynamic_slice_in_dim(angles, i * block, block)
+        return acc + jnp.sum(jax.vmap(layer)(some), axis=0)
+
+    zero = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), jax.eval_shape(layer, angles[0]))
+    total = jax.lax.fori_loop(0, n_blocks, add_block, zero)
+    if n_layers > n_blocks * block:
+        total = total + jnp.sum(jax.vmap(layer)(angles[n_blocks * block:]), axis=0)
+    return total
+
+
 @jax.named_scope("shade")
 def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -> Array:
     """Outgoing linear RGB radiance float32[N, 3] towards ``points.view``; 0 for invalid points.
@@ -189,9 +218,6 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     else:
         # Shader-cost layers: the lights again with the normal nudged along the tangent by
         # a layer-dependent angle (< LAYER_NUDGE), so XLA cannot hoist or merge the layers.
-        # Batched over the layers (vmap), not looped: a loop on a GPU pays a host round trip
-        # and its kernels' launches per layer, so a launch's cost would grow with the layers
-        # whatever its lanes; batched, XLA fuses the layers and the cost is the work.
         t = safe_normalize(points.tangent[:, :3] - n * dot(n, points.tangent[:, :3]), n)
         angles = LAYER_NUDGE * ((jnp.arange(layers, dtype=jnp.float32) + 0.5) / layers - 0.5)
 
@@ -199,7 +225,7 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
             n_i = safe_normalize(n + t * ang, n)
             return _lights(points, scene, effects, n_i, albedo, spec_params)
 
-        direct = jnp.sum(jax.vmap(layer)(angles), axis=0) / layers
+        direct = layer_sum(layer, angles, n.shape[0]) / layers
     rgb = direct + albedo * scene.lights.ambient[None, :]
     if effects.emissive:
         rgb = rgb + _gather(m.emissive, mat)
