@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Prepared in the twentieth session for the next one (carry [".whl"]), one call per line:
+#   bash benchmarks/gpu_twenty_first.sh fits      (about 6 minutes)
+#   bash benchmarks/gpu_every_scene.sh 1          (then 2, then 3: the targets' table)
+# fits: fixed cost and slope on foliage at shader costs 0, 256 and 1024, every pipeline. At 256
+#   DACS's shading (21 M layer evaluations) added less than its run-to-run spread; at 1024 it
+#   evaluates 83 M. The shader-cost layers now run in blocks above shade.LAYER_LANES
+#   layer-lanes (deferred's foliage screen at 256: one loop iteration and 63 layers after it).
+#   Prediction: slopes of checkerboard, forward, visbuffer and TADS within 25% of deferred's
+#   as at 256; DACS's measurable; object space's still 1.6-2.7x.
+. "$(dirname "$0")/gpu_env.sh"
+export PYTHONPATH=$PWD:/tmp/site
+for part in "$@"; do
+  if [ "$part" = fits ]; then
+    timeout 560 python3 benchmarks/bench_time_work.py --scenes foliage --frames 8 \
+      --costs 0 256 1024 --repeats 5 --budget 520 --label blocks --out "$OUT/time_work.jsonl" \
+      --pipelines visibility deferred checkerboard dacs forward visbuffer tads object_space \
+      2>&1 | quiet | grep -v '^{' | tee -a "$OUT/fits.md"
+  fi
+done
+exit 0
