@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -126,8 +127,9 @@ def test_unowned_taps_count_the_taps_that_read_a_shadel_no_triangle_owns():
     assert np.all(owner[:16 * LANES] >= 0), "the plane's level 0 should be owned throughout"
     owner[:LANES:2] = -1
     holed = dataclasses.replace(sheet, owner=jnp.asarray(owner))
-    frame, _ = osp.frame_step(scene, holed, scene.camera, cfg, osp.empty_state(holed, cfg),
-                              jnp.bool_(True))
+    step = jax.jit(lambda sc, sh: osp.frame_step(sc, sh, sc.camera, cfg,
+                                                  osp.empty_state(sh, cfg), jnp.bool_(True)))
+    frame, _ = step(scene, holed)
     c = {k: int(np.asarray(v)) for k, v in frame.counts.items()
          if k in ("unowned_taps", "missing_taps", "overflow", "shade_invocations")}
     assert c == {"unowned_taps": 32, "missing_taps": 0, "overflow": 0,
