@@ -134,8 +134,13 @@ def main(argv=None) -> int:
                     f.write(json.dumps(row) + "\n")
                 print(json.dumps(row), flush=True)
     for (scene, spec), f in fit(rows).items():
-        print(f"fit {a.label} {scene} {spec}: fixed {f.intercept_ms:.3f} +- {f.intercept_se:.3f} ms,"
-              f" slope {f.slope_ms:.4f} +- {f.slope_se:.4f} ms/M, R^2 {f.r2:.3f}"
+        if f.n > 2:
+            line = (f"fixed {f.intercept_ms:.3f} +- {f.intercept_se:.3f} ms, slope "
+                    f"{f.slope_ms:.4f} +- {f.slope_se:.4f} ms/M, R^2 {f.r2:.3f}")
+        else:  # a line through two points: no residual, so no standard error
+            line = (f"fixed {f.intercept_ms:.3f} ms, slope {f.slope_ms:.4f} ms/M (two costs: "
+                    "no standard error)")
+        print(f"fit {a.label} {scene} {spec}: {line}"
               + ("" if f.linear else f" (not linear: {f.note})"))
     return 0
 
