@@ -8,6 +8,11 @@
 #   layer-lanes (deferred's foliage screen at 256: one loop iteration and 63 layers after it).
 #   Prediction: slopes of checkerboard, forward, visbuffer and TADS within 25% of deferred's
 #   as at 256; DACS's measurable; object space's still 1.6-2.7x.
+#   bash benchmarks/gpu_twenty_first.sh dacs      (build .v first: benchmarks/variants/prepare.sh;
+#                                                  carry [".whl", ".v"]; about 3 minutes)
+# dacs: DACS against v19 (424a5fe) on foliage, room and thin, alternated twice: its decide and
+#   interpolate passes now add their four parents' terms instead of reducing over them (CPU:
+#   -21% on foliage, -27% on room). Prediction: 0.1-0.2 ms a frame less on the GPU.
 . "$(dirname "$0")/gpu_env.sh"
 export PYTHONPATH=$PWD:/tmp/site
 for part in "$@"; do
@@ -16,6 +21,11 @@ for part in "$@"; do
       --costs 0 256 1024 --repeats 5 --budget 520 --label blocks --out "$OUT/time_work.jsonl" \
       --pipelines visibility deferred checkerboard dacs forward visbuffer tads object_space \
       2>&1 | quiet | grep -v '^{' | tee -a "$OUT/fits.md"
+  elif [ "$part" = dacs ]; then
+    for round in 1 2; do
+      trees dacs.jsonl 120 "v19 after" --frames 16 --rounds 5 --scenes foliage room thin \
+        --pipelines dacs
+    done
   fi
 done
 exit 0

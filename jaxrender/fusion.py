@@ -44,6 +44,11 @@ def all_small(x: Array, axis: int = -1) -> Array:
     return functools.reduce(operator.and_, _slices(x, axis, False))
 
 
+def any_small(x: Array, axis: int = -1) -> Array:
+    """``jnp.any`` over a short static axis, as ors."""
+    return functools.reduce(operator.or_, _slices(x, axis, False))
+
+
 def materialize(x: Array) -> Array:
     """``x``, stored once: its consumers read it instead of each fusing its computation.
 

@@ -32,6 +32,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxrender.fusion import any_small, sum_small
 import jaxrender.pipelines.dacs_warp as dacs_warp
 import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
@@ -173,16 +174,16 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
         pidx, ins, wts = t["pidx"][level], t["ins"][level], t["wts"][level]
         c = img[pidx]  # [n, 4, 3] parents, final from earlier levels
         with jax.named_scope("decide"):
-            id_diff = jnp.any(ins & (ids_f[pidx] != ids_f[pix][:, None]), axis=1)
+            id_diff = any_small(ins & (ids_f[pidx] != ids_f[pix][:, None]), axis=1)
             lum = luma(c, luma_kind, space)  # [n, 4]
             insf = ins.astype(jnp.float32)
-            mean = jnp.sum(insf * lum, axis=1) / t["cnt"][level]
-            var = jnp.sum(insf * (lum - mean[:, None]) ** 2, axis=1) / t["cnt"][level]
+            mean = sum_small(insf * lum, axis=1) / t["cnt"][level]
+            var = sum_small(insf * (lum - mean[:, None]) ** 2, axis=1) / t["cnt"][level]
             cov = cov_f[pix] & live
             no_pair = ~t["pair"][level] if border == "shade" else jnp.zeros_like(cov)
             need = cov & ((level == 0) | no_pair | id_diff | (var >= thr))
         with jax.named_scope("interpolate"):
-            interp = jnp.sum(wts[:, :, None] * c, axis=1)
+            interp = sum_small(wts[:, :, None] * c, axis=1)
             val = jnp.where((cov & ~need)[:, None], interp, 0.0)
             img = img.at[jnp.where(live, pix, n_pix)].set(val, mode="drop")
         with jax.named_scope("shade"):
