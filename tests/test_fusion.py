@@ -9,7 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrender.fusion import all_small, materialize, materialize_all, max_small, sum_small
+from jaxrender.fusion import (all_small, any_small, materialize, materialize_all, max_small,
+                              sum_small)
 from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.shading import load_lit_scene, shade
 from jaxrender.shading.vec import safe_normalize
@@ -30,6 +31,9 @@ def test_short_reductions_equal_jnp(shape, axis):
     b = x > -0.5
     np.testing.assert_array_equal(jax.jit(lambda a: all_small(a, axis))(b), np.all(b, axis=axis),
                                   err_msg=f"all_small over axis {axis} of {shape}")
+    b = x > 0.8  # mostly False, so some rows have no True
+    np.testing.assert_array_equal(jax.jit(lambda a: any_small(a, axis))(b), np.any(b, axis=axis),
+                                  err_msg=f"any_small over axis {axis} of {shape}")
     np.testing.assert_array_equal(jax.jit(lambda a: max_small(a, (axis,)))(x),
                                   np.max(x, axis=axis, keepdims=True),
                                   err_msg=f"max_small over axis {axis} of {shape}")
