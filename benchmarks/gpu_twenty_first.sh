@@ -6,8 +6,8 @@
 #   DACS's shading (21 M layer evaluations) added less than its run-to-run spread; at 1024 it
 #   evaluates 83 M. The shader-cost layers now run in blocks above shade.LAYER_LANES
 #   layer-lanes (deferred's foliage screen at 256: one loop iteration and 63 layers after it).
-#   Prediction: slopes of checkerboard, forward, visbuffer and TADS within 25% of deferred's
-#   as at 256; DACS's measurable; object space's still 1.6-2.7x.
+#   Prediction: slopes of checkerboard, forward and visbuffer within 25% of deferred's as at
+#   256 (TADS was 26% off in one call); DACS's measurable; object space's still about 2x.
 #   bash benchmarks/gpu_twenty_first.sh dacs      (build .v first: benchmarks/variants/prepare.sh;
 #                                                  carry [".whl", ".v"]; about 3 minutes)
 # dacs: DACS against v19 (424a5fe) on foliage, room and thin, alternated twice: its decide and
