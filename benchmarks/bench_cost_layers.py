@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
 
 import jax
 import jax.numpy as jnp
@@ -41,8 +42,6 @@ def covered_points(scene, camera, w, h):
 
 def time_launch(scene, camera, pts, repeats: int) -> tuple[float, float]:
     """(median ms, compile s) of one launch shading ``pts``."""
-    import time
-
     fn = jax.jit(lambda s, c, p: shade(surface_points(s, c, *p), s))
     t0 = time.perf_counter()
     call = fn.lower(scene, camera, pts).compile()

@@ -179,8 +179,8 @@ def layer_sum(layer, angles: Array, lanes: int) -> Array:
         some = jax.lax.dynamic_slice_in_dim(angles, i * block, block)
         return acc + jnp.sum(jax.vmap(layer)(some), axis=0)
 
-    zero = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), jax.eval_shape(layer, angles[0]))
-    total = jax.lax.fori_loop(0, n_blocks, add_block, zero)
+    one = jax.eval_shape(layer, angles[0])
+    total = jax.lax.fori_loop(0, n_blocks, add_block, jnp.zeros(one.shape, one.dtype))
     if n_layers > n_blocks * block:
         total = total + jnp.sum(jax.vmap(layer)(angles[n_blocks * block:]), axis=0)
     return total
