@@ -31,9 +31,9 @@ import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
+from jaxrender.pipelines.reference_transparent import sample_pass
 from jaxrender.pipelines.registry import REGISTRY, RenderConfig, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
-from jaxrender.pipelines.transparency import sample_pass
 from jaxrender.pipelines.visibility import is_alpha_tested, opaque_faces
 from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
                                         sample_visibility)
