@@ -6,6 +6,8 @@ shadows traces no shadow lookup, one without textures no texture gather, and so 
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 
@@ -112,13 +114,19 @@ def _normal_map(points: SurfacePoints, scene: Scene, effects: Effects) -> tuple[
     return jnp.where(has, mapped, n), jnp.where(has, jnp.clip(length, 0.0, 1.0), 1.0)
 
 
-@jax.named_scope("lights")
 def _lights(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, albedo: Array,
             spec_params) -> Array:
     """Sum over all directional and point lights of f * E * cos, [N, 3]."""
+    return _light_sum(points, scene, effects, n, albedo, spec_params,
+                      _incoming(points, scene, effects))
+
+
+@jax.named_scope("lights")
+def _incoming(points: SurfacePoints, scene: Scene, effects: Effects):
+    """(direction to each light l, its irradiance E, shadows included), float32[N, L, 3] each,
+    or None for a scene without lights: what the lobes need besides the shading normal."""
     lt = scene.lights
-    pos, ng, v = points.position, points.normal, points.view
-    mat = points.material
+    pos, ng = points.position, points.normal
     ls, es = [], []
     if lt.dir_to_light.shape[0]:
         ld = jnp.broadcast_to(lt.dir_to_light[None], (pos.shape[0],) + lt.dir_to_light.shape)
@@ -138,9 +146,18 @@ def _lights(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, alb
         ls.append(d / jnp.sqrt(dist2))
         es.append(lt.point_intensity[None, :, :] / dist2)
     if not ls:
+        return None
+    return jnp.concatenate(ls, axis=1), jnp.concatenate(es, axis=1)
+
+
+@jax.named_scope("lights")
+def _light_sum(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, albedo: Array,
+               spec_params, incoming) -> Array:
+    """sum_lights f(l, v) E cos at shading normal n float32[N, 3], given ``_incoming``'s."""
+    if incoming is None:
         return jnp.zeros_like(albedo)
-    l_dir = jnp.concatenate(ls, axis=1)  # [N, L, 3]
-    e = jnp.concatenate(es, axis=1)
+    l_dir, e = incoming
+    ng, v, mat = points.normal, points.view, points.material
     n_l = n[:, None, :]
     cos = dot(n_l, l_dir)  # [N, L, 1]
     above = dot(ng[:, None, :], l_dir) > 0.0
@@ -221,9 +238,18 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
         t = safe_normalize(points.tangent[:, :3] - n * dot(n, points.tangent[:, :3]), n)
         angles = LAYER_NUDGE * ((jnp.arange(layers, dtype=jnp.float32) + 0.5) / layers - 0.5)
 
+        # What every layer shares (the lights' directions and irradiance, the shadow lookups
+        # among them, and the point's frame), computed and stored once: fused into the batched
+        # layers, XLA computed it again for each layer.
+        incoming = _incoming(points, scene, effects)
+        if incoming is not None:
+            *incoming, n, t, albedo, ng, v = materialize_all(*incoming, n, t, albedo,
+                                                             points.normal, points.view)
+            points = dataclasses.replace(points, normal=ng, view=v)
+
         def layer(ang):
             n_i = safe_normalize(n + t * ang, n)
-            return _lights(points, scene, effects, n_i, albedo, spec_params)
+            return _light_sum(points, scene, effects, n_i, albedo, spec_params, incoming)
 
         direct = layer_sum(layer, angles, n.shape[0]) / layers
     rgb = direct + albedo * scene.lights.ambient[None, :]

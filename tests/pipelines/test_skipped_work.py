@@ -28,7 +28,7 @@ def _counted(monkeypatch):
     """Patch the layer evaluation to report (lanes, live points) per call; returns the list."""
     shade_module = importlib.import_module("jaxrender.shading.shade")
     calls: list = []
-    layer = getattr(shade_module, "_lights")
+    layer = getattr(shade_module, "_light_sum")
 
     def counting(points, scene, effects, normal, *args):
         # The normal is the one argument that differs between the shader-cost layers (batched
@@ -38,7 +38,7 @@ def _counted(monkeypatch):
                            normal[0, 0])
         return layer(points, scene, effects, normal, *args)
 
-    monkeypatch.setattr(shade_module, "_lights", counting)
+    monkeypatch.setattr(shade_module, "_light_sum", counting)
     return calls
 
 
