@@ -13,6 +13,12 @@
 # dacs: DACS against v19 (424a5fe) on foliage, room and thin, alternated twice: its decide and
 #   interpolate passes now add their four parents' terms instead of reducing over them (CPU:
 #   -21% on foliage, -27% on room). Prediction: 0.1-0.2 ms a frame less on the GPU.
+#   bash benchmarks/gpu_twenty_first.sh shared    (carry [".whl", ".v"]; about 7 minutes)
+# shared: v20 (c87d91d) against this tree, costs 0 and 256 on foliage and room, deferred,
+#   object space and forward: the shader-cost layers now read the lights' incoming terms and
+#   the point's frame stored once instead of each layer computing them again (CPU, 480x270:
+#   slopes -25 to -44% on room, -22 to -39% on foliage). Prediction: lower slopes on the GPU
+#   too, most on room (point lights); cost 0 unchanged (no layers).
 . "$(dirname "$0")/gpu_env.sh"
 export PYTHONPATH=$PWD:/tmp/site
 for part in "$@"; do
@@ -25,6 +31,14 @@ for part in "$@"; do
     for round in 1 2; do
       trees dacs.jsonl 120 "v19 after" --frames 16 --rounds 5 --scenes foliage room thin \
         --pipelines dacs
+    done
+  elif [ "$part" = shared ]; then
+    for t in v20 after; do
+      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout 270 python3 benchmarks/bench_time_work.py \
+        --scenes foliage room --frames 8 --costs 0 256 --repeats 5 --budget 240 --label "$t" \
+        --pipelines deferred object_space forward --out "$OUT/shared.jsonl" \
+        2>&1 | quiet | grep -v '^{' | sed "s/^/$t: /" | tee -a "$OUT/shared.md"
     done
   fi
 done

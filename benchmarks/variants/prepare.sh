@@ -19,10 +19,18 @@ mkdir -p .v/v16
 git archive fd3a891 jaxrender | tar -x -C .v/v16
 mkdir -p .v/v19
 git archive 424a5fe jaxrender | tar -x -C .v/v19
+mkdir -p .v/v20
+git archive c87d91d jaxrender | tar -x -C .v/v20
 for p in benchmarks/variants/*.patch; do
   name=$(basename "$p" .patch)
   mkdir -p ".v/$name"
   git archive HEAD jaxrender | tar -x -C ".v/$name"
+  # A variant written against an older HEAD may no longer apply: skipped, named, not half-built.
+  if ! patch -s -f --dry-run -d ".v/$name" -p1 < "$p" > /dev/null; then
+    echo "skipped $name: $p does not apply to HEAD" >&2
+    rm -rf ".v/$name"
+    continue
+  fi
   patch -s -d ".v/$name" -p1 < "$p"
 done
 ls .v
