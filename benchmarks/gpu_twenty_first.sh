@@ -18,7 +18,9 @@
 #   object space and forward: the shader-cost layers now read the lights' incoming terms and
 #   the point's frame stored once instead of each layer computing them again (CPU, 480x270:
 #   slopes -25 to -44% on room, -22 to -39% on foliage). Prediction: lower slopes on the GPU
-#   too, most on room (point lights); cost 0 unchanged (no layers).
+#   too, most on room (point lights), and object space's most of all if its 2x slope came
+#   from each layer rebuilding parts of its shadel points (gathers from the sheet) that
+#   deferred reads from its G-buffer; cost 0 unchanged (no layers).
 . "$(dirname "$0")/gpu_env.sh"
 export PYTHONPATH=$PWD:/tmp/site
 for part in "$@"; do
