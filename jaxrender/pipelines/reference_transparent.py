@@ -1,7 +1,5 @@
-"""The reference's transparent pass: every layer of S sub-samples at once, exactly sorted.
-
-The samples share one fragment list, one shading dispatch and one sort, as S x P pixels of
-their own (``transparency``'s plan, shade and composite over them)."""
+"""The reference's transparent pass: every layer of S sub-samples at once, exactly sorted,
+through ``transparency``'s plan, shade and composite."""
 
 from __future__ import annotations
 

@@ -114,13 +114,6 @@ def _normal_map(points: SurfacePoints, scene: Scene, effects: Effects) -> tuple[
     return jnp.where(has, mapped, n), jnp.where(has, jnp.clip(length, 0.0, 1.0), 1.0)
 
 
-def _lights(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, albedo: Array,
-            spec_params) -> Array:
-    """Sum over all directional and point lights of f * E * cos, [N, 3]."""
-    return _light_sum(points, scene, effects, n, albedo, spec_params,
-                      _incoming(points, scene, effects))
-
-
 @jax.named_scope("lights")
 def _incoming(points: SurfacePoints, scene: Scene, effects: Effects):
     """(direction to each light l, its irradiance E, shadows included), float32[N, L, 3] each,
@@ -153,7 +146,8 @@ def _incoming(points: SurfacePoints, scene: Scene, effects: Effects):
 @jax.named_scope("lights")
 def _light_sum(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, albedo: Array,
                spec_params, incoming) -> Array:
-    """sum_lights f(l, v) E cos at shading normal n float32[N, 3], given ``_incoming``'s."""
+    """Sum over all directional and point lights of f(l, v) E cos at shading normal n,
+    float32[N, 3], given ``_incoming``'s terms."""
     if incoming is None:
         return jnp.zeros_like(albedo)
     l_dir, e = incoming
@@ -231,7 +225,8 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
                            brdf.toksvig_roughness(alpha_g, length))
     layers = 1 + effects.shader_cost
     if layers == 1:
-        direct = _lights(points, scene, effects, n, albedo, spec_params)
+        direct = _light_sum(points, scene, effects, n, albedo, spec_params,
+                            _incoming(points, scene, effects))
     else:
         # Shader-cost layers: the lights again with the normal nudged along the tangent by
         # a layer-dependent angle (< LAYER_NUDGE), so XLA cannot hoist or merge the layers.
