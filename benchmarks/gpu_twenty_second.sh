@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-second session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call per line:
-#   bash benchmarks/gpu_twenty_second.sh shared glass   (about 9 minutes)
+#   bash benchmarks/gpu_twenty_second.sh shared glass   (about 7 minutes)
 #   bash benchmarks/gpu_twenty_first.sh dacs            (about 3 minutes)
 # shared: v20 (c87d91d) against this tree, costs 0 and 256 on foliage and room, object space
-#   first (the rows a budget cut would lose last), then deferred and forward. The shader-cost
+#   and deferred (object space first: a budget cut loses the last rows). The shader-cost
 #   layers now read the lights' incoming terms and the point's frame from one store instead of
 #   each layer computing them again (CPU, 480x270: slopes -25 to -44% on room, -22 to -39% on
 #   foliage). Prediction: lower slopes on the GPU too, most on room (point lights); object
@@ -18,13 +18,13 @@ for part in "$@"; do
   if [ "$part" = shared ]; then
     for t in v20 after; do
       if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      PYTHONPATH=$R:/tmp/site timeout 240 python3 benchmarks/bench_time_work.py \
-        --scenes foliage room --frames 8 --costs 0 256 --repeats 5 --budget 215 --label "$t" \
-        --pipelines object_space deferred forward --out "$OUT/shared.jsonl" \
+      PYTHONPATH=$R:/tmp/site timeout 175 python3 benchmarks/bench_time_work.py \
+        --scenes foliage room --frames 8 --costs 0 256 --repeats 5 --budget 150 --label "$t" \
+        --pipelines object_space deferred --out "$OUT/shared.jsonl" \
         2>&1 | quiet | grep -v '^{' | sed "s/^/$t: /" | tee -a "$OUT/shared.md"
     done
   elif [ "$part" = glass ]; then
-    timeout -k 5 90 python3 benchmarks/profile_kernels.py deferred --scene glass --top 30 \
+    timeout -k 5 80 python3 benchmarks/profile_kernels.py deferred --scene glass --top 30 \
       --calls 3 --scope visibility --scope gbuffer --scope lighting --scope transparent \
       --scope front --scope layer_shading --scope composite --scope sorted_blend 2>&1 | quiet \
       | tee -a "$OUT/profile.md"
