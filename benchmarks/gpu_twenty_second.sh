@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-second session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call per line:
-#   bash benchmarks/gpu_twenty_second.sh shared glass   (about 7 minutes)
+#   bash benchmarks/gpu_twenty_second.sh shared glass room   (about 7 minutes)
 #   bash benchmarks/gpu_twenty_first.sh dacs            (about 3 minutes)
 # shared: v20 (c87d91d) against this tree, costs 0 and 256 on foliage and room, object space
 #   and deferred (object space first: a budget cut loses the last rows). The shader-cost
@@ -12,6 +12,9 @@
 #   points; cost 0 unchanged (no layers).
 # glass: where deferred spends a frame on glass (every pipeline is over 3 ms there): kernels
 #   by scope, the largest 30.
+# room: where deferred's lighting pass on room goes (0.94 ms on an H200 in the twentieth
+#   session; the 64-sample reference shades 64 of it a pixel): surface points, textures,
+#   lights and the shadow lookup, the largest 25 kernels.
 . "$(dirname "$0")/gpu_env.sh"
 export PYTHONPATH=$PWD:/tmp/site
 for part in "$@"; do
@@ -27,6 +30,11 @@ for part in "$@"; do
     timeout -k 5 80 python3 benchmarks/profile_kernels.py deferred --scene glass --top 30 \
       --calls 3 --scope visibility --scope gbuffer --scope lighting --scope transparent \
       --scope front --scope layer_shading --scope composite --scope sorted_blend 2>&1 | quiet \
+      | tee -a "$OUT/profile.md"
+  elif [ "$part" = room ]; then
+    timeout -k 5 70 python3 benchmarks/profile_kernels.py deferred --scene room --top 25 \
+      --calls 3 --scope visibility --scope gbuffer --scope lighting --scope surface_points \
+      --scope texture --scope lights --scope shadow_lookup 2>&1 | quiet \
       | tee -a "$OUT/profile.md"
   fi
 done
