@@ -3,7 +3,7 @@
 # benchmarks/variants/prepare.sh), one call per line:
 #   bash benchmarks/gpu_twenty_second.sh shared glass room   (about 7 minutes)
 #   bash benchmarks/gpu_twenty_first.sh dacs            (about 3 minutes)
-# shared: v20 (c87d91d) against this tree, costs 0 and 256 on foliage and room, object space
+# shared: v20 (c87d91d) against this tree, costs 0 and 256 on foliage and room (SCENES), object space
 #   and deferred (object space first: a budget cut loses the last rows). The shader-cost
 #   layers now read the lights' incoming terms and the point's frame from one store instead of
 #   each layer computing them again (CPU, 480x270: slopes -25 to -44% on room, -22 to -39% on
@@ -22,7 +22,7 @@ for part in "$@"; do
     for t in v20 after; do
       if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
       PYTHONPATH=$R:/tmp/site timeout 175 python3 benchmarks/bench_time_work.py \
-        --scenes foliage room --frames 8 --costs 0 256 --repeats 5 --budget 150 --label "$t" \
+        --scenes ${SCENES:-foliage room} --frames 8 --costs 0 256 --repeats 5 --budget 150 --label "$t" \
         --pipelines object_space deferred --out "$OUT/shared.jsonl" \
         2>&1 | quiet | grep -v '^{' | sed "s/^/$t: /" | tee -a "$OUT/shared.md"
     done
