@@ -238,8 +238,10 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
         # layers, XLA computed it again for each layer.
         incoming = _incoming(points, scene, effects)
         if incoming is not None:
-            *incoming, n, t, albedo, ng, v = materialize_all(*incoming, n, t, albedo,
-                                                             points.normal, points.view)
+            l_dir, e = incoming
+            l_dir, e, n, t, albedo, ng, v = materialize_all(l_dir, e, n, t, albedo,
+                                                            points.normal, points.view)
+            incoming = (l_dir, e)
             points = dataclasses.replace(points, normal=ng, view=v)
 
         def layer(ang):
