@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-second session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call per line:
-#   bash benchmarks/gpu_twenty_second.sh shared room glass   (about 7 minutes)
+#   bash benchmarks/gpu_twenty_second.sh parts room glass      (about 5 minutes)
+#   bash benchmarks/gpu_twenty_second.sh shared                (about 6 minutes)
 #   bash benchmarks/gpu_twenty_first.sh dacs                 (about 3 minutes)
 # shared: v20 (c87d91d) against this tree, costs 0 and 256 on foliage and room (or $SCENES),
 #   object space and deferred (object space first: a budget cut loses the last rows). The
@@ -15,6 +16,10 @@
 # room: where deferred's lighting pass on room goes (0.94 ms on an H200 in the twentieth
 #   session; the 64-sample reference shades 64 of it a pixel): surface points, textures,
 #   lights and the shadow lookup, the largest 25 kernels.
+# parts: one shade() launch over room's and foliage's covered pixels with each effect off in
+#   turn (bench_shade_parts.py), and the optimized programs' text kept in $OUT/hlo: how many
+#   kernels the shader is split into on the GPU and what they store between them (on the CPU,
+#   room's shader stores 902 bytes a point in 134 instructions).
 . "$(dirname "$0")/gpu_env.sh"
 export PYTHONPATH=$PWD:/tmp/site
 prof() {  # prof SCENE SECONDS TOP SCOPE...: deferred's kernels on SCENE by named scope
@@ -35,6 +40,9 @@ for part in "$@"; do
   elif [ "$part" = glass ]; then
     prof glass 80 30 visibility gbuffer lighting transparent front layer_shading composite \
       sorted_blend
+  elif [ "$part" = parts ]; then
+    timeout -k 5 150 python3 benchmarks/bench_shade_parts.py --scenes room foliage \
+      --out "$OUT/shade_parts.jsonl" --hlo "$OUT/hlo" 2>&1 | quiet | tee -a "$OUT/parts.md"
   elif [ "$part" = room ]; then
     prof room 70 25 visibility gbuffer lighting surface_points texture lights shadow_lookup
   fi
