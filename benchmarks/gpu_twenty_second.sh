@@ -3,6 +3,7 @@
 # benchmarks/variants/prepare.sh), one call per line:
 #   bash benchmarks/gpu_twenty_second.sh parts room glass      (about 5 minutes)
 #   bash benchmarks/gpu_twenty_second.sh shared                (about 6 minutes)
+#   bash benchmarks/gpu_twenty_second.sh instruments           (about 5 minutes)
 #   bash benchmarks/gpu_twenty_first.sh dacs                 (about 3 minutes)
 # shared: v20 (c87d91d) against this tree, costs 0 and 256 on foliage and room (or $SCENES),
 #   object space and deferred (object space first: a budget cut loses the last rows). The
@@ -16,6 +17,9 @@
 # room: where deferred's lighting pass on room goes (0.94 ms on an H200 in the twentieth
 #   session; the 64-sample reference shades 64 of it a pixel): surface points, textures,
 #   lights and the shadow lookup, the largest 25 kernels.
+# instruments: each pipeline's sequence with all its outputs against its images alone
+#   (bench_instruments.py): the share of a frame that is the counts and views, not the
+#   architecture's work (CPU, 480x270: see RESULTS, twenty-third session).
 # parts: one shade() launch over room's and foliage's covered pixels with each effect off in
 #   turn (bench_shade_parts.py), and the optimized programs' text kept in $OUT/hlo: how many
 #   kernels the shader is split into on the GPU and what they store between them (on the CPU,
@@ -40,6 +44,10 @@ for part in "$@"; do
   elif [ "$part" = glass ]; then
     prof glass 80 30 visibility gbuffer lighting transparent front layer_shading composite \
       sorted_blend
+  elif [ "$part" = instruments ]; then
+    timeout -k 5 300 python3 benchmarks/bench_instruments.py --scenes thin foliage room \
+      --pipelines object_space dacs forward deferred --out "$OUT/instruments.jsonl" 2>&1 \
+      | quiet | tee -a "$OUT/instruments.md"
   elif [ "$part" = parts ]; then
     timeout -k 5 150 python3 benchmarks/bench_shade_parts.py --scenes room foliage \
       --out "$OUT/shade_parts.jsonl" --hlo "$OUT/hlo" 2>&1 | quiet | tee -a "$OUT/parts.md"
