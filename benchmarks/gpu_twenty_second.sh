@@ -23,7 +23,7 @@
 # parts: one shade() launch over room's and foliage's covered pixels with each effect off in
 #   turn (bench_shade_parts.py), and the optimized programs' text kept in $OUT/hlo: how many
 #   kernels the shader is split into on the GPU and what they store between them (on the CPU,
-#   room's shader stores 902 bytes a point in 134 instructions).
+#   room's shader stores 902 bytes a point in 93 kernels).
 . "$(dirname "$0")/gpu_env.sh"
 export PYTHONPATH=$PWD:/tmp/site
 prof() {  # prof SCENE SECONDS TOP SCOPE...: deferred's kernels on SCENE by named scope
