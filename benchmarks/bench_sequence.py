@@ -40,11 +40,13 @@ from jaxrender.scene.camera_path import pan  # noqa: E402
 from jaxrender.shading import load_lit_scene  # noqa: E402
 
 
-def _compile_both(pipe, scene, path, cfg, single=True):
-    seq, seq_ms = program.compile(pipe, scene, path, cfg, sequence=True)
+def _compile_both(pipe, scene, path, cfg, single=True, outputs="all"):
+    # An older tree (PYTHONPATH=.v/...) knows no `outputs`: it is passed only when not "all".
+    kw = {} if outputs == "all" else {"outputs": outputs}
+    seq, seq_ms = program.compile(pipe, scene, path, cfg, sequence=True, **kw)
     if not single:
         return seq, None, seq_ms / 1e3, None
-    one, one_ms = program.compile(pipe, scene, _camera(path, 0), cfg)
+    one, one_ms = program.compile(pipe, scene, _camera(path, 0), cfg, **kw)
     return seq, one, seq_ms / 1e3, one_ms / 1e3
 
 
@@ -81,6 +83,10 @@ def main(argv=None) -> int:
     ap.add_argument("--checksum", action="store_true",
                     help="add each sequence's image sum and shading count to its row, to show "
                          "that two variants (XLA flags, trees) rendered the same frames")
+    ap.add_argument("--outputs", choices=("images", "all"), default="images",
+                    help="what the timed programs return: the images alone (the default; XLA "
+                         "drops the counts' and views' work), or the counts and views too (as "
+                         "before the twenty-fourth session; an older tree knows only this)")
     a = ap.parse_args(argv)
     w, h = a.resolution
     names = a.pipelines or [p.name for p in list_pipelines()]
@@ -97,7 +103,7 @@ def main(argv=None) -> int:
                 pipe = next(p for p in list_pipelines() if p.name == base)
                 cfg = make_config(base, width=w, height=h, **params)
                 jobs[sname, name] = (scene, path, pool.submit(_compile_both, pipe, scene, path,
-                                                               cfg, not a.no_single))
+                                                               cfg, not a.no_single, a.outputs))
         wait([fut for _, _, fut in jobs.values()])  # no compile thread competes with a timing
         rows = []
         for (sname, name), (scene, path, fut) in jobs.items():
@@ -123,8 +129,8 @@ def main(argv=None) -> int:
                 rows.append({"scene": sname, "pipeline": name,
                              "error": f"{type(e).__name__}: {e}"[:160]})
             print(json.dumps(rows[-1]), flush=True)
-    print(f"\n{w}x{h}, {a.frames}-frame pan ({a.pixels_per_frame} px/frame), "
-          f"{a.rounds} rounds; {env['device']}, jax {env['jax_version']}, "
+    print(f"\n{w}x{h}, {a.frames}-frame pan ({a.pixels_per_frame} px/frame), outputs "
+          f"{a.outputs}, {a.rounds} rounds; {env['device']}, jax {env['jax_version']}, "
           f"{time.strftime('%Y-%m-%d')}\n")
     print_table(rows, ["scene", "pipeline", "sequence_ms_per_frame", "single_ms", "ratio",
                        "compile_seq_s", "compile_single_s", "error"])

@@ -27,7 +27,7 @@ import numpy as np
 from jaxrender.parsing import parse_spec, resolution_arg
 from jaxrender.study.shader_cost import shading_work
 from jaxrender.study.time_fit import fit_line
-from jaxrender.timing import device_description, time_call
+from jaxrender.timing import block, device_description, time_call
 
 DEFAULT_PIPELINES = ("visibility", "forward", "forward:z_prepass=true", "deferred", "visbuffer",
                      "checkerboard", "dacs", "object_space", "reference")
@@ -48,11 +48,14 @@ def visibility_sequence_program(scene, path, cfg):
 
 
 def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repeats: int,
-            frames: int = 0):
+            frames: int = 0, outputs: str = "images"):
     """One row: median and min ms of the steady-state frame, compile seconds, counts. With
     ``frames``, the frame's time inside a sequence of that many frames (a pan at 1 px/frame,
     one program, as studies time a frame): the sequence's time over ``frames``, counts the mean
-    over its frames. Without, one single-frame call (its per-call overhead included)."""
+    over its frames. Without, one single-frame call (its per-call overhead included).
+    ``outputs="images"``: the timed program returns the images alone (the counts come from
+    one call of the instrumented program); ``"all"``: the instrumented program is timed (a
+    tree from before the twenty-fourth session knows no other)."""
     from jaxrender.pipelines import get_pipeline, make_config
     from jaxrender.pipelines import program
     from jaxrender.scene import default_camera
@@ -65,7 +68,7 @@ def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repe
     per = max(frames, 1)
     name, params = parse_spec(spec, "--pipelines")
     row = dict(scene=scene_name, pipeline=spec, shader_cost=cost, resolution=f"{width}x{height}",
-               frames=frames)
+               frames=frames, outputs=outputs)
     t0 = time.perf_counter()
     if name == "visibility":
         cfg = make_config("deferred", width=width, height=height)
@@ -75,9 +78,15 @@ def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repe
         _, median, samples = time_call(call, scene, cams, repeats=repeats, warmup=2)
         return dict(row, median_ms=median / per, min_ms=min(samples) / per, shade_invocations=0)
     cfg = make_config(name, width=width, height=height, **params)
-    call, _ = program.compile(get_pipeline(name), scene, cams, cfg, sequence=bool(frames))
+    pipe = get_pipeline(name)
+    call, _ = program.compile(pipe, scene, cams, cfg, sequence=bool(frames))
     row["compile_s"] = time.perf_counter() - t0
-    frame, median, samples = time_call(call, scene, cams, repeats=repeats, warmup=2)
+    if outputs == "images":  # timed with the images alone; the counts from one call of `call`
+        frame = block(call(scene, cams))
+        call, _ = program.compile(pipe, scene, cams, cfg, sequence=bool(frames),
+                                  outputs="images")
+    frame_or_image, median, samples = time_call(call, scene, cams, repeats=repeats, warmup=2)
+    frame = frame if outputs == "images" else frame_or_image
     counts = {k: float(np.mean(np.asarray(v))) for k, v in frame.counts.items()
               if np.ndim(v) == (1 if frames else 0)}
     keep = ("shade_invocations", "lanes", "dispatch_lanes", "fragments", "waves", "overflow")
@@ -112,6 +121,10 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=0,
                     help="time each frame inside a sequence of this many frames (how studies "
                          "time a frame); 0: single-frame calls")
+    ap.add_argument("--outputs", choices=("images", "all"), default="images",
+                    help="what the timed program returns: the images alone (the default), or "
+                         "the counts and views too (as every time before the twenty-fourth "
+                         "session, and the only choice for an older tree)")
     a = ap.parse_args(argv)
     w, h = a.resolution
     t_start = time.time()
@@ -124,7 +137,8 @@ def main(argv=None) -> int:
                     row = dict(scene=scene, pipeline=spec, shader_cost=cost, skipped="budget")
                 else:
                     try:
-                        row = measure(scene, spec, cost, w, h, a.repeats, a.frames)
+                        row = measure(scene, spec, cost, w, h, a.repeats, a.frames,
+                                      a.outputs)
                     except Exception as e:  # noqa: BLE001 - a failed row is kept with its reason
                         row = dict(scene=scene, pipeline=spec, shader_cost=cost,
                                    error=f"{type(e).__name__}: {e}"[:300])

@@ -10,7 +10,8 @@ python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upg
   --target /tmp/site .whl/*.whl || exit 1
 export PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 quiet() { grep -v "^WARNING\|^I0000\|^E0000\|^W0000"; }
-B="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+# --outputs all: the older trees know no other, and a comparison times like with like.
+B="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --outputs all"
 # trees FILE SECONDS "TREE ..." BENCH-ARGS...: the bench in each tree (after: this checkout,
 # else .v/TREE), its rows tagged with the tree and appended to $OUT/FILE.
 trees() {

@@ -38,7 +38,7 @@ for part in "$@"; do
       if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
       PYTHONPATH=$R:/tmp/site timeout 175 python3 benchmarks/bench_time_work.py \
         --scenes ${SCENES:-foliage room} --frames 8 --costs 0 256 --repeats 5 --budget 150 \
-        --label "$t" --pipelines object_space deferred --out "$OUT/shared.jsonl" \
+        --label "$t" --pipelines object_space deferred --out "$OUT/shared.jsonl" --outputs all \
         2>&1 | quiet | grep -v '^{' | sed "s/^/$t: /" | tee -a "$OUT/shared.md"
     done
   elif [ "$part" = glass ]; then

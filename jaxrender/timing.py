@@ -49,11 +49,12 @@ class Compiled:
 
 
 def compile_program(pipe, scene, cameras, cfg, *, sequence: bool = False,
-                    warmup_frames: int = 0) -> Compiled:
+                    warmup_frames: int = 0, outputs: str = "all") -> Compiled:
     """``pipe``'s single-frame program (``cameras`` one camera) or its sequence program over
-    the path ``cameras``, compiled ahead of time (``pipelines.program.compile``)."""
+    the path ``cameras``, compiled ahead of time (``pipelines.program.compile``), returning
+    ``outputs`` (one of ``program.OUTPUTS``)."""
     call, ms = program.compile(pipe, scene, cameras, cfg, sequence=sequence,
-                               warmup_frames=warmup_frames)
+                               warmup_frames=warmup_frames, outputs=outputs)
     return Compiled(call, ms)
 
 

@@ -3,9 +3,12 @@
 pipeline alike.
 
 Both go through one jitted function, ``_program``, whose static arguments are the Pipeline,
-the config (its TRACED_FIELDS replaced by their defaults) and the mode (one frame, or a
-sequence with a number of warm-up frames to drop); the scene, the pipeline's prepared static
-data, the cameras and the traced config fields are its arguments. So moving the camera or
+the config (its TRACED_FIELDS replaced by their defaults), the mode (one frame, or a
+sequence with a number of warm-up frames to drop) and the outputs (``"all"``: images, counts
+and views; ``"images"``: the images and the overflow count alone, so that XLA drops every
+computation only the counts and views read, which is what a timed frame should cost); the
+scene, the pipeline's prepared static data, the cameras and the traced config fields are its
+arguments. So moving the camera or
 sweeping a traced field never recompiles, and a sequence compiles once per (scene shape, path
 length, config).
 
@@ -100,19 +103,30 @@ def _step(pipe, scene, static, state, camera, t, cfg):
     return pipe.step(posed, static, state, camera, t, cfg)
 
 
-def _program(pipe, static_cfg, mode, scene, static, cameras, traced, start):
+OUTPUTS = ("all", "images")
+
+
+def images_only(frame: Frame) -> Frame:
+    """``frame`` less its counts and views: its image and, where it has one, the overflow
+    count (which the image already depends on: an overflowed image is NaN)."""
+    over = (frame.counts or {}).get("overflow")
+    return Frame(frame.image, {} if over is None else {"overflow": over}, {})
+
+
+def _program(pipe, static_cfg, mode, outputs, scene, static, cameras, traced, start):
     cfg = join_config(static_cfg, traced)
+    keep = images_only if outputs == "images" else (lambda frame: frame)
     if mode == "frame":
         state = _init(pipe, scene, static, cameras, cfg)
         frame, _ = _step(pipe, scene, static, state, cameras, start, cfg)
-        return frame
+        return keep(frame)
     _, skip = mode
     n = int(np.shape(jax.tree_util.tree_leaves(cameras)[0])[0])
 
     def body(state, xs):
         camera, t = xs
         frame, state = _step(pipe, scene, static, state, camera, t, cfg)
-        return state, frame
+        return state, keep(frame)
 
     state = _init(pipe, scene, static, _first(cameras), cfg)
     ts = start + jnp.arange(n, dtype=jnp.int32)
@@ -120,7 +134,7 @@ def _program(pipe, static_cfg, mode, scene, static, cameras, traced, start):
     return jax.tree_util.tree_map(lambda a: a[skip:], frames) if skip else frames
 
 
-_program_jit = jax.jit(_program, static_argnums=(0, 1, 2))
+_program_jit = jax.jit(_program, static_argnums=(0, 1, 2, 3))
 
 
 def unjitted(fixed) -> Callable:
@@ -198,9 +212,13 @@ class Prepared:
     start: int = 0
 
 
-def _arguments(pipe, scene, cameras, cfg, sequence: bool, warmup_frames: int, start=0):
+def _arguments(pipe, scene, cameras, cfg, sequence: bool, warmup_frames: int, start=0,
+               outputs: str = "all"):
     """(static jit arguments, dynamic arguments, Prepared) of ``pipe``'s program; host-side
-    preparation happens here. ``start``: the frame index (animation clock) of the first frame."""
+    preparation happens here. ``start``: the frame index (animation clock) of the first frame;
+    ``outputs``: one of OUTPUTS."""
+    if outputs not in OUTPUTS:
+        raise ValueError(f"outputs must be one of {', '.join(OUTPUTS)}, got {outputs!r}")
     if not _is_traced(scene, cameras):  # a compile may follow: room for its kernels
         memory_maps.release_if_crowded()
     if sequence:
@@ -210,7 +228,7 @@ def _arguments(pipe, scene, cameras, cfg, sequence: bool, warmup_frames: int, st
     static = pipe.prepare(scene, cfg)
     static_cfg, traced = split_config(cfg)
     t0 = jnp.asarray(start, jnp.int32)
-    return ((pipe, static_cfg, mode), (scene, static, cameras, traced, t0),
+    return ((pipe, static_cfg, mode, outputs), (scene, static, cameras, traced, t0),
             Prepared(static, traced, sequence, start))
 
 
@@ -230,11 +248,12 @@ def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0, start=
     return frames if _is_traced(*args) else check_overflow(pipe, cfg, frames)
 
 
-def arguments(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0):
+def arguments(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0,
+              outputs: str = "all"):
     """(static jit arguments, dynamic arguments, Prepared) of ``pipe``'s program, host-side
     preparation done and nothing traced: what identifies a compiled program without lowering
-    it (the study's executable store keys on these)."""
-    return _arguments(pipe, scene, cameras, cfg, sequence, warmup_frames)
+    it (the study's executable store keys on these). ``outputs``: one of OUTPUTS."""
+    return _arguments(pipe, scene, cameras, cfg, sequence, warmup_frames, outputs=outputs)
 
 
 def lower_arguments(fixed, args):
@@ -242,10 +261,12 @@ def lower_arguments(fixed, args):
     return _program_jit.lower(*fixed, *args)
 
 
-def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0):
+def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0,
+          outputs: str = "all"):
     """(jax Lowered program, Prepared) for ``pipe`` on this scene and camera (a single camera,
-    or a path when ``sequence``)."""
-    fixed, args, prepared = _arguments(pipe, scene, cameras, cfg, sequence, warmup_frames)
+    or a path when ``sequence``), returning ``outputs`` (one of OUTPUTS)."""
+    fixed, args, prepared = _arguments(pipe, scene, cameras, cfg, sequence, warmup_frames,
+                                       outputs=outputs)
     return lower_arguments(fixed, args), prepared
 
 
@@ -268,16 +289,17 @@ def bind(pipe, cfg, compiled, prepared: Prepared) -> Callable:
     return call
 
 
-def compile(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0
-            ) -> tuple[Callable, float]:
-    """Ahead of time: (``call(scene, cameras) -> Frame``, compile ms including preparation)."""
+def compile(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0,
+            outputs: str = "all") -> tuple[Callable, float]:
+    """Ahead of time: (``call(scene, cameras) -> Frame``, compile ms including preparation);
+    ``outputs="images"``: the Frames hold the images and the overflow count alone."""
     t0 = time.perf_counter()
     lowered, prepared = lower(pipe, scene, cameras, cfg, sequence=sequence,
-                              warmup_frames=warmup_frames)
+                              warmup_frames=warmup_frames, outputs=outputs)
     compiled = lowered.compile()
     return bind(pipe, cfg, compiled, prepared), (time.perf_counter() - t0) * 1e3
 
 
-__all__ = ["PipelineOverflow", "Prepared", "arguments", "bind", "cache_size", "check_overflow",
-           "clear_cache", "compile", "join_config", "lower", "lower_arguments", "render",
-           "render_sequence", "split_config", "stack_cameras"]
+__all__ = ["OUTPUTS", "PipelineOverflow", "Prepared", "arguments", "bind", "cache_size",
+           "check_overflow", "clear_cache", "compile", "images_only", "join_config", "lower",
+           "lower_arguments", "render", "render_sequence", "split_config", "stack_cameras"]

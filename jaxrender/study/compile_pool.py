@@ -71,6 +71,7 @@ class Job:
     cfg: Any  # its config
     sequence: bool = False  # the sequence program over the path, else the single frame
     warmup_frames: int = 0
+    outputs: str = "all"  # one of program.OUTPUTS
     # The loaded scene, when the parent has it: a worker then loads nothing (loading can
     # compile programs of its own, a shadow map's rasterizer, in every worker again).
     scene: Any = None
@@ -121,7 +122,8 @@ def compile_job(payload: bytes) -> bytes:
     t0 = time.perf_counter()
     fixed, args, prepared = program.arguments(job.pipeline, scene, cams, job.cfg,
                                               sequence=job.sequence,
-                                              warmup_frames=job.warmup_frames)
+                                              warmup_frames=job.warmup_frames,
+                                              outputs=job.outputs)
     key = executables.program_key(job.pipeline, fixed, args)
     exe = executables.read(key)
     t_prepared = time.perf_counter()
@@ -134,7 +136,7 @@ def compile_job(payload: bytes) -> bytes:
         import sys
 
         print(f"TIMELINE pid={os.getpid()} {job.source} {type(job.cfg).__name__} "
-              f"sequence={job.sequence} start={started:.2f} scene_s={t0 - t_start:.2f} "
+              f"sequence={job.sequence} outputs={job.outputs} start={started:.2f} scene_s={t0 - t_start:.2f} "
               f"prepare_s={t_prepared - t0:.2f} compile_s={t_end - t_prepared:.2f} "
               f"stored={stored} end={started + t_end - t_start:.2f}", file=sys.stderr,
               flush=True)

@@ -203,19 +203,20 @@ def _environment() -> dict:
 
 def program_key(pipe, fixed, args, device=None) -> str | None:
     """The store's key of the program with static jit arguments ``fixed`` (pipeline, static
-    config, mode) and dynamic arguments ``args`` (``program.arguments``); None when the store
+    config, mode, outputs) and dynamic arguments ``args`` (``program.arguments``); None when the store
     is off or the program cannot be named without tracing (an argument that is no array, a
     static value whose repr is an address)."""
     if not enabled():
         return None
-    _, static_cfg, mode = fixed
+    _, static_cfg, mode, outputs = fixed
     try:
         leaves, treedef = jax.tree_util.tree_flatten(args)
         avals = [jax.typeof(x) for x in leaves]
         # Pickled as well as written out: a repr may leave a field out, a pickle does not.
-        statics = hashlib.sha256(pickle.dumps((static_cfg, mode, treedef))).hexdigest()
+        statics = hashlib.sha256(pickle.dumps((static_cfg, mode, outputs, treedef))).hexdigest()
         parts = {**_environment(), "pipeline": [pipe.name, _sources(pipe)],
-                 "config": repr(static_cfg), "mode": repr(mode), "tree": str(treedef),
+                 "config": repr(static_cfg), "mode": repr(mode), "outputs": outputs,
+                 "tree": str(treedef),
                  "statics": statics, "target": None if device is None else int(device.id),
                  "avals": [[str(a.dtype), list(a.shape), bool(a.weak_type)] for a in avals]}
     except (TypeError, ValueError, OSError, AttributeError, pickle.PicklingError) as e:
@@ -360,13 +361,15 @@ def note_worker_program(stored: bool) -> None:
 
 
 def compile_program(pipe, scene, cameras, cfg, *, sequence: bool = False,
-                    warmup_frames: int = 0, device=None) -> timing.Compiled:
+                    warmup_frames: int = 0, device=None, outputs: str = "all"
+                    ) -> timing.Compiled:
     """``timing.compile_program`` through the store: loaded when stored (method "stored",
     compile_ms the preparation and load), else compiled and stored. ``device``: the device
-    it runs on (default: the first), a part of the store's key."""
+    it runs on (default: the first), a part of the store's key; ``outputs``: one of
+    ``program.OUTPUTS``."""
     t0 = time.perf_counter()
     fixed, args, prepared = program.arguments(pipe, scene, cameras, cfg, sequence=sequence,
-                                              warmup_frames=warmup_frames)
+                                              warmup_frames=warmup_frames, outputs=outputs)
     if device is not None:  # committed arguments: the program is lowered for that device
         args = jax.device_put(args, device)
     key = program_key(pipe, fixed, args, device)

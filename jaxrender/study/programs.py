@@ -19,6 +19,7 @@ import dataclasses
 import os
 from concurrent.futures import Future, ThreadPoolExecutor
 from functools import partial
+from typing import NamedTuple
 
 import jax
 
@@ -72,10 +73,11 @@ def variant_scene(scene, variant):
 
 
 def compile_variant(study: Study, scene, cameras, variant, *, sequence: bool,
-                    device=None) -> timing.Compiled:
+                    device=None, outputs: str = "all") -> timing.Compiled:
     """The variant's sequence program over ``cameras`` (the rendered path, warm-up included)
     or, with ``sequence=False``, its single-frame program (``cameras`` one camera); it takes
-    ``variant_scene(scene, variant)``, on ``device`` (default: the default device)."""
+    ``variant_scene(scene, variant)``, on ``device`` (default: the default device), and
+    returns ``outputs`` (one of ``program.OUTPUTS``)."""
     w, h = study.resolution
     pipe = backend.pipeline(variant.type)
     params, cost = shader_cost.split(dict(variant.params))
@@ -83,7 +85,7 @@ def compile_variant(study: Study, scene, cameras, variant, *, sequence: bool,
     scene = backend.with_shader_cost(scene, cost)
     return executables.compile_program(pipe, scene, cameras, cfg, sequence=sequence,
                                        warmup_frames=study.warmup_frames if sequence else 0,
-                                       device=device)
+                                       device=device, outputs=outputs)
 
 
 def retargeted(compiled: timing.Compiled, study: Study, variant) -> timing.Compiled:
@@ -96,10 +98,37 @@ def retargeted(compiled: timing.Compiled, study: Study, variant) -> timing.Compi
     return dataclasses.replace(compiled, call=partial(compiled.call, traced=traced))
 
 
-def program_key(spec, variant, frames: int = 0) -> tuple:
-    """One compiled program per scene, variant and sequence length (0: the single-frame
-    program): the points of a sweep share a label, so the key holds their parameters too."""
-    return spec.label, variant.label, variant.params_json, frames
+def program_key(spec, variant, frames: int = 0, outputs: str = "all") -> tuple:
+    """One compiled program per scene, variant, sequence length (0: the single-frame program)
+    and outputs: the points of a sweep share a label, so the key holds their parameters too."""
+    return spec.label, variant.label, variant.params_json, frames, outputs
+
+
+class SequencePrograms(NamedTuple):
+    """The compiled programs one sequence runs (``roles``)."""
+
+    instrumented: timing.Compiled  # images, counts and views: what the rows are made of
+    timed: timing.Compiled | None = None  # images only; None: the instrumented one is timed
+    single: timing.Compiled | None = None  # the single-frame program, timed beside
+
+
+def roles(study: Study, frames: int) -> dict[str, tuple[int, str]]:
+    """{role in SequencePrograms: (frames, outputs)} of a sequence of ``frames`` frames
+    (warm-up included): its instrumented program; with ``timing.outputs = "images"`` the
+    images-only program it times; with ``timing.single_frame`` its single-frame program,
+    returning ``timing.outputs`` (only its time is kept)."""
+    out = {"instrumented": (frames, "all")}
+    if study.timing.outputs == "images":
+        out["timed"] = (frames, "images")
+    if study.timing.single_frame:
+        out["single"] = (0, study.timing.outputs)
+    return out
+
+
+def sequence_programs(study: Study, spec, variant, frames: int, get) -> SequencePrograms:
+    """The SequencePrograms of ``variant``'s sequence of ``frames`` frames on ``spec``'s
+    scene: ``get(frames, outputs)`` gives each role's compiled program."""
+    return SequencePrograms(**{role: get(*fo) for role, fo in roles(study, frames).items()})
 
 
 class _Compiler:
@@ -115,7 +144,8 @@ class _Compiler:
         self.procs = (compile_pool.ProcessCompiler(COMPILE_WORKERS, self.threads)
                       if compile_pool.use_processes(COMPILE_WORKERS) else None)
 
-    def submit(self, label, spec, path, pipe, params, sequence, fn, *args, thread=False):
+    def submit(self, label, spec, path, pipe, params, sequence, fn, *args, thread=False,
+               outputs="all"):
         """fn(*args) in a thread, or the program of pipeline ``pipe`` with ``params`` in a
         worker process with fn(*args) as the fallback; ``thread``: a thread in any case (a
         worker process compiles for its own first device only)."""
@@ -133,7 +163,7 @@ class _Compiler:
                 tuple(study.resolution), backend.pipeline(pipe),
                 backend.make_config(pipe, *study.resolution, params),
                 sequence=sequence, warmup_frames=study.warmup_frames if sequence else 0,
-                scene=backend.with_shader_cost(self.scenes[spec.label], cost))
+                outputs=outputs, scene=backend.with_shader_cost(self.scenes[spec.label], cost))
         except Exception:  # fn raises it again, where the thread path would
             return self.threads.submit(fn, *args)
         return self.procs.submit(label, job, lambda: fn(*args))
@@ -145,8 +175,8 @@ class _Compiler:
 
 
 def compile_all(study: Study, todo, scenes: dict, cams: dict, device_of=None) -> dict:
-    """Compile every program of ``todo`` (per scene and variant the sequence program of each
-    path length and the single-frame program), and the reference program of each scene whose
+    """Compile every program of ``todo`` (per scene, variant and path length the programs of
+    ``roles``), and the reference program of each scene whose
     references are not all cached, while this thread renders the references into the cache.
     ``cams[scene label, path name]`` are the rendered path's cameras (warm-up included).
     Returns {program_key: Compiled}. Programs in the executable store are loaded from it;
@@ -193,13 +223,13 @@ def _compile_all(study: Study, todo, scenes: dict, cams: dict, device_of=None) -
         comp.close()
 
 
-def program_identity(spec, variant, frames: int = 0) -> tuple:
+def program_identity(spec, variant, frames: int = 0, outputs: str = "all") -> tuple:
     """What a program is compiled from: its key less the config's TRACED_FIELDS, which are
     the program's arguments (the points of a threshold sweep share one program, and so one
     device)."""
     traced = backend.pipeline(variant.type).config_cls.TRACED_FIELDS
     rest = tuple((k, v) for k, v in variant.params if k not in traced)
-    return spec.label, variant.type, repr(rest), frames
+    return spec.label, variant.type, repr(rest), frames, outputs
 
 
 def _submit_variants(comp: _Compiler, study: Study, todo, scenes: dict, cams: dict,
@@ -216,18 +246,19 @@ def _submit_variants(comp: _Compiler, study: Study, todo, scenes: dict, cams: di
         seq_cams = cams[spec.label, path.name]
         device = device_of(spec, v) if device_of else None
         elsewhere = device is not None and device != default
-        for frames in (len(seq_cams), 0) if study.timing.single_frame else (len(seq_cams),):
-            key = program_key(spec, v, frames)
-            same = first.setdefault(program_identity(spec, v, frames), key)
+        for frames, outputs in roles(study, len(seq_cams)).values():
+            key = program_key(spec, v, frames, outputs)
+            same = first.setdefault(program_identity(spec, v, frames, outputs), key)
             if same != key and key not in futures:
                 aliases[key] = (same, v)
                 continue
             if key not in futures:
-                what = f"{spec.label}/{v.label}" + (f" ({frames} frames)" if frames else "")
+                what = (f"{spec.label}/{v.label}" + (f" ({frames} frames)" if frames else "")
+                        + (" (images)" if outputs == "images" else ""))
                 args = (seq_cams, v) if frames else (seq_cams[warm], v)
                 fn = partial(compile_variant, sequence=bool(frames),
-                             device=device if elsewhere else None)
+                             device=device if elsewhere else None, outputs=outputs)
                 futures[key] = comp.submit(what, spec, path, v.type, v.params, bool(frames),
                                            fn, study, scenes[spec.label], *args,
-                                           thread=elsewhere)
+                                           thread=elsewhere, outputs=outputs)
     return futures, aliases

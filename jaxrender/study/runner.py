@@ -28,7 +28,7 @@ from jaxrender.study import (backend, cache, compile_cache, executables, matchin
 from jaxrender.study import devices as devices_mod
 from jaxrender.study.programs import (compile_all, compile_variant, compile_workers,
                                       program_identity, program_key, rendered_path,
-                                      retargeted, variant_scene)
+                                      retargeted, roles, sequence_programs, variant_scene)
 from jaxrender.study.references import reference_frames
 from jaxrender.study.sequence_run import run_sequence, sequence_key
 from jaxrender.study.specs import Study, Variant, to_toml
@@ -91,7 +91,7 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     store.export_csv(rows, out_dir / "results.csv")
     summ = summary.summarize(rows)
     summary.write_summary(summ, out_dir / "summary.csv")
-    log(summary.format_summary(summ))
+    log(summary.format_summary(summ) + "\n" + summary.time_note(rows))
     fits = time_series.fit_series(rows)
     if fits:  # the study sweeps shader_cost
         time_series.write_csv(fits, out_dir / "time_fits.csv")
@@ -184,11 +184,10 @@ def _scenes_and_cameras(study: Study, todo) -> tuple[dict, dict]:
 
 
 def _programs_of(study: Study, cams: dict, item) -> set:
-    """The identities of the programs a sequence runs: its sequence program, and its
-    single-frame program when the study times single frames."""
+    """The identities of the programs a sequence runs (``programs.roles``)."""
     spec, path, v = item
     n = len(cams[spec.label, path.name])
-    return {program_identity(spec, v, f) for f in ((n, 0) if study.timing.single_frame else (n,))}
+    return {program_identity(spec, v, *fo) for fo in roles(study, n).values()}
 
 
 def _compile_part(study: Study, part, scenes, cams, placement, bar, log) -> dict:
@@ -227,8 +226,8 @@ def _render_placed(study, todo, st, env, out_dir, bar, compiled, scenes, cams, p
                         scenes[spec.label], placement.devices[d]))
                 device = placement.devices[d]
                 extra = {"device_index": int(device.id), "devices": n}
-                progs = (compiled[program_key(spec, v, len(seq_cams))],
-                         compiled.get(program_key(spec, v)))
+                progs = sequence_programs(study, spec, v, len(seq_cams),
+                                          lambda *fo: compiled[program_key(spec, v, *fo)])
                 jobs.append((d, partial(run_sequence, study, on_device[spec.label, d], spec,
                                         path, seq_cams, v, refs, {**env, **extra}, out_dir,
                                         progress=bar, compiled=progs),
@@ -308,11 +307,10 @@ def _match_one(study: Study, st, ctx, key: str, entry, m, seq: str) -> list[dict
         raise StudyError(study.file, f"{key}.on", f"the rows of {m.against!r} and "
                          f"{entry.label!r} hold no number {m.on!r}")
     template = entry.variants[0]
-    progs = tuple(compiled.get(program_key(spec, template, n)) or compile_variant(
-        study, variant_scene(scene, template), cams if n else cams[study.warmup_frames],
-        template, sequence=bool(n)) for n in
-        ((len(cams), 0) if study.timing.single_frame else (len(cams),)))
-    progs = progs if len(progs) == 2 else (progs[0], None)
+    progs = sequence_programs(study, spec, template, len(cams), lambda n, outputs: (
+        compiled.get(program_key(spec, template, n, outputs)) or compile_variant(
+            study, variant_scene(scene, template), cams if n else cams[study.warmup_frames],
+            template, sequence=bool(n), outputs=outputs)))
 
     # A probe aiming at a count or a metric is timed once, not repeated: only the final
     # render's time is kept, and only a time match needs its probes' times to be good.
@@ -322,7 +320,7 @@ def _match_one(study: Study, st, ctx, key: str, entry, m, seq: str) -> list[dict
     def render(value, save=False):
         v = Variant(m.label, entry.type, tuple(sorted({**dict(template.params),
                                                          param: value}.items())))
-        run = tuple(p and retargeted(p, study, v) for p in progs)
+        run = type(progs)(*(p and retargeted(p, study, v) for p in progs))
         return run_sequence(study if save else quick, scene, spec, path, cams, v, refs, env,
                             out_dir, compiled=run, seq=seq, save_images=save)
 

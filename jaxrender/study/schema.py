@@ -23,8 +23,9 @@ from jaxrender.metrics import DEFAULT_METRICS, METRICS
 from jaxrender.parsing import parse_resolution
 from jaxrender.scene.camera_path import PATH_TYPES, REQUIRED, overridden_message
 from jaxrender.study import backend, matching, shader_cost
-from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, PathSpec, PipelineSpec,
-                                   ReferenceSpec, SceneSpec, Study, TimingSpec, Variant)
+from jaxrender.study.specs import (FIGURES, SSIM_MIN_SIDE, TIMED_OUTPUTS, PathSpec,
+                                   PipelineSpec, ReferenceSpec, SceneSpec, Study, TimingSpec,
+                                   Variant)
 from jaxrender.study.tables import (Checker, type_name, key_path, read_table, read_toml,
                                     shown_path)
 
@@ -352,6 +353,9 @@ def parse_study(data: dict, file: str, *, study_dir: Path, configs: Path | None 
     save_frames = tuple(sorted({ck.int_(v, f"save_frames[{i}]", lo=0)
                                 for i, v in enumerate(save)}))
     timing = TimingSpec(**read_table(ck, d["timing"], "timing", TimingSpec))
+    if timing.outputs not in TIMED_OUTPUTS:
+        ck.fail("timing.outputs", f"expected one of {', '.join(map(repr, TIMED_OUTPUTS))}, "
+                f"got {timing.outputs!r}")
     scenes = _unique(ck, [_scene(ck, item, f"scenes[{i}]", local, study_dir) for i, item in
                           enumerate(ck.list_(d["scenes"], "scenes"))],
                      "label", "scenes", "scene label", "; set `label`")

@@ -18,7 +18,8 @@ import numpy as np
 from jaxrender import timing
 from jaxrender.pipelines.program import PipelineOverflow, stack_cameras
 from jaxrender.study import backend, shader_cost, store
-from jaxrender.study.programs import compile_variant, compile_workers, variant_scene
+from jaxrender.study.programs import (SequencePrograms, compile_variant, compile_workers,
+                                      sequence_programs, variant_scene)
 from jaxrender.study.specs import Study
 
 
@@ -60,39 +61,45 @@ def sequence_key(study: Study, spec, path, variant) -> str:
     )
 
 
-def _render_timed(study: Study, seq_prog, one_prog, scene, cams_all, cams):
-    """(frames of the sequence, its median ms, single-frame median ms per scored frame or
-    NaN without a single-frame program)."""
+def _render_timed(study: Study, progs: SequencePrograms, scene, cams_all, cams):
+    """(frames of the instrumented sequence program, the timed sequence program's median ms,
+    the single-frame program's median ms per scored frame, or NaN without one)."""
     reps, warm = study.timing.repeats, study.timing.warmup
     path = stack_cameras(cams_all)  # once, outside the timed calls
-    frames, seq_ms, _ = timing.time_call(seq_prog.call, scene, path, repeats=reps, warmup=warm)
-    if one_prog is None:
+    if progs.timed is None:
+        frames, seq_ms, _ = timing.time_call(progs.instrumented.call, scene, path,
+                                             repeats=reps, warmup=warm)
+    else:
+        frames = timing.block(progs.instrumented.call(scene, path))
+        _, seq_ms, _ = timing.time_call(progs.timed.call, scene, path, repeats=reps,
+                                        warmup=warm)
+    if progs.single is None:
         return frames, seq_ms, [float("nan")] * len(cams)
     for _ in range(warm):
-        timing.block(one_prog.call(scene, cams[0]))
-    single = [timing.time_call(one_prog.call, scene, cam, repeats=reps)[1] for cam in cams]
+        timing.block(progs.single.call(scene, cams[0]))
+    single = [timing.time_call(progs.single.call, scene, cam, repeats=reps)[1] for cam in cams]
     return frames, seq_ms, single
 
 
 def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, out_dir: Path,
-                 progress=None, compiled: tuple | None = None, *, seq: str | None = None,
-                 save_images: bool = True) -> list[dict]:
+                 progress=None, compiled: SequencePrograms | None = None, *,
+                 seq: str | None = None, save_images: bool = True) -> list[dict]:
     """Render one sequence (``cams_all``: the rendered path, warm-up frames first) as one
-    ``render_sequence`` program, time it and its single-frame program, score every scored
-    frame; returns its rows (not yet stored). ``compiled``: (sequence, single) programs;
-    ``seq``: the rows' sequence key (default: the variant's); ``save_images``: keep the
-    ``save_frames`` (a bisection's probes do not)."""
+    ``render_sequence`` program, time it (or, with ``timing.outputs = "images"``, its
+    images-only twin) and its single-frame program, score every scored frame; returns its
+    rows (not yet stored). ``compiled``: its programs (default: compiled here); ``seq``: the
+    rows' sequence key (default: the variant's); ``save_images``: keep the ``save_frames``
+    (a bisection's probes do not)."""
     w, h = study.resolution
     warm = study.warmup_frames
     cams = cams_all[warm:]
     scene = variant_scene(scene, variant)
-    seq_prog, one_prog = compiled or (
-        compile_variant(study, scene, cams_all, variant, sequence=True),
-        compile_variant(study, scene, cams[0], variant, sequence=False)
-        if study.timing.single_frame else None)
+    progs = compiled or sequence_programs(
+        study, spec, variant, len(cams_all), lambda n, outputs: compile_variant(
+            study, scene, cams_all if n else cams[0], variant, sequence=bool(n),
+            outputs=outputs))
     try:
-        frames, seq_ms, single_ms = _render_timed(study, seq_prog, one_prog, scene, cams_all,
-                                                  cams)
+        frames, seq_ms, single_ms = _render_timed(study, progs, scene, cams_all, cams)
     except PipelineOverflow as e:
         raise PipelineOverflow(f"scene {spec.label!r}, path {path.name!r}, pipeline "
                                f"{variant.label!r} {variant.params_json}: {e}") from None
@@ -119,9 +126,11 @@ def run_sequence(study: Study, scene, spec, path, cams_all, variant, refs, env, 
             **metrics, **counts, "time_ms": seq_ms / len(cams_all),
             "time_ms_single": single_ms[t], "sequence_ms": seq_ms,
             "sequence_frames": len(cams_all), "warmup_frames": warm,
-            "compile_ms": seq_prog.compile_ms,
-            "compile_ms_single": one_prog.compile_ms if one_prog else float("nan"),
-            "compile_method": seq_prog.method, "compile_workers": compile_workers(),
+            "timed_outputs": study.timing.outputs,
+            "compile_ms": progs.instrumented.compile_ms,
+            "compile_ms_timed": progs.timed.compile_ms if progs.timed else float("nan"),
+            "compile_ms_single": progs.single.compile_ms if progs.single else float("nan"),
+            "compile_method": progs.instrumented.method, "compile_workers": compile_workers(),
             "finite": finite, **env,
         }
         if "convergence_psnr" in refs[t]:

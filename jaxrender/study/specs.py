@@ -25,6 +25,7 @@ FIGURES = (
     "time_work",
     "summary_table",
 )
+TIMED_OUTPUTS = ("images", "all")  # the choices of [timing] outputs
 SSIM_MIN_SIDE = 11  # the 11-tap Gaussian window of Wang et al.
 
 
@@ -115,8 +116,13 @@ class TimingSpec:
     warmup: int = _field(1, lo=0)
     repeats: int = _field(3, lo=1)
     # Also compile and time each variant's single-frame program (time_ms_single beside the
-    # per-frame time in the sequence); false compiles one program per variant, not two.
+    # per-frame time in the sequence); false compiles one program fewer per variant.
     single_frame: bool = True
+    # What the timed programs return. "images": the images alone, so that XLA drops what only
+    # the counts and views need and a time is the architecture's work; the rows' counts come
+    # from a second, instrumented program. "all": the instrumented program is timed itself
+    # (one program fewer to compile; the times then include the counts and views).
+    outputs: str = "images"
 
 
 @dataclass(frozen=True)

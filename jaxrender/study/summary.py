@@ -50,6 +50,18 @@ def format_summary(summary: list[dict]) -> str:
     return "\n".join([fmt(heads), fmt(["-" * w for w in widths])] + [fmt(r) for r in lines])
 
 
+def time_note(rows: list[dict]) -> str:
+    """What the rows' ``time_ms`` measured, by their ``timed_outputs`` ([timing] outputs)."""
+    kinds = {r.get("timed_outputs", "all") for r in rows}
+    if kinds == {"images"}:
+        return ("time ms: per frame, timed with the images alone as outputs (the counts "
+                "come from a second program)")
+    if kinds == {"all"}:
+        return ("time ms: per frame, timed with the counts and views among the outputs "
+                "([timing] outputs = \"all\"): they add to it")
+    return "time ms: some rows timed the images alone, others with the counts and views"
+
+
 def _fmt(v: float, col: str) -> str:
     if isinstance(v, float) and math.isnan(v):
         return "-"

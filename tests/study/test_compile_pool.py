@@ -42,14 +42,16 @@ def _frames(study, todo, scenes, cams, compiled):
     out = {}
     for s, p, v in todo:
         seq_cams = cams[s.label, p.name]
-        prog = compiled[programs.program_key(s, v)]
+        progs = programs.sequence_programs(
+            study, s, v, len(seq_cams), lambda *fo: compiled[programs.program_key(s, v, *fo)])
         for t, cam in enumerate(seq_cams):
-            f = prog.call(scenes[s.label], cam)
+            f = progs.single.call(scenes[s.label], cam)
             out[s.label, p.name, v.label, v.params_json, t] = jax.tree.map(
                 np.asarray, (f.image, f.counts, f.aux))
-        f = compiled[programs.program_key(s, v, len(seq_cams))].call(scenes[s.label], seq_cams)
-        out[s.label, p.name, v.label, v.params_json, "sequence"] = jax.tree.map(
-            np.asarray, (f.image, f.counts, f.aux))
+        for role in ("instrumented", "timed"):
+            f = getattr(progs, role).call(scenes[s.label], seq_cams)
+            out[s.label, p.name, v.label, v.params_json, role] = jax.tree.map(
+                np.asarray, (f.image, f.counts, f.aux))
     return out
 
 
@@ -81,10 +83,11 @@ def _compile(monkeypatch, mode, plan, tmp_path):
 
 
 def _keys(plan):
-    """Per scene and variant: the single-frame program and one sequence program per length."""
+    """Per scene, variant and path length: the programs of ``programs.roles`` (the default
+    timing: the instrumented and the images-only sequence programs, the single-frame one)."""
     study, todo, _, cams = plan
-    return ({programs.program_key(s, v) for s, _, v in todo}
-            | {programs.program_key(s, v, len(cams[s.label, p.name])) for s, p, v in todo})
+    return {programs.program_key(s, v, *fo) for s, p, v in todo
+            for fo in programs.roles(study, len(cams[s.label, p.name])).values()}
 
 
 def _notes(caplog):

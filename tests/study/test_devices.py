@@ -66,7 +66,7 @@ print(json.dumps({"skipped": resumed.skipped, "computed": resumed.computed}))
 """
 
 VARYING = {"time_ms", "time_ms_single", "sequence_ms", "compile_ms", "compile_ms_single",
-           "compile_method", "device_index", "devices"}
+           "compile_ms_timed", "compile_method", "device_index", "devices"}
 
 
 def test_four_devices_give_the_rows_of_one(tiny_study, tmp_path):

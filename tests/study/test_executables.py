@@ -41,13 +41,14 @@ def _study(tiny_study, out, monkeypatch):
     lines = []
     monkeypatch.setenv("JAXRENDER_CACHE", str(out.parent / "cache"))
     res = run_study(load_study(tiny_study), out, progress=False, log=lines.append)
-    line = next(ln for ln in lines if "program(s)" in ln)
-    return res, line
+    # One line per batch of programs (``program_batches``)
+    return res, "\n".join(ln for ln in lines if "program(s)" in ln)
 
 
-def _store_counts(line):
-    m = re.search(r"executable store: (\d+) loaded, (\d+) compiled", line)
-    return (int(m[1]), int(m[2])) if m else None
+def _store_counts(lines):
+    """(loaded, compiled) summed over the batches' lines; None where no line names them."""
+    found = re.findall(r"executable store: (\d+) loaded, (\d+) compiled", lines)
+    return tuple(sum(int(m[i]) for m in found) for i in (0, 1)) if found else None
 
 
 def test_rerun_loads_every_program(tiny_study, tmp_path, monkeypatch):
@@ -55,7 +56,7 @@ def test_rerun_loads_every_program(tiny_study, tmp_path, monkeypatch):
     # As in a new process: programs jax kept in memory from the tests before are not stored.
     jax.clear_caches()
     first, line1 = _study(tiny_study, tmp_path / "one", monkeypatch)
-    n = int(re.search(r"(\d+) program\(s\)", line1)[1])
+    n = sum(int(m) for m in re.findall(r"(\d+) program\(s\)", line1))
     assert _store_counts(line1) == (0, n + 2), line1  # and both scenes' reference programs
     assert "not stored" not in line1, line1
     stored = list(executables.folder().glob(f"*{executables.SUFFIX}"))

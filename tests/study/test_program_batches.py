@@ -58,11 +58,12 @@ def test_a_batched_run_gives_the_rows_of_one_batch(tiny_study, tmp_path, monkeyp
     monkeypatch.setattr(program_batches, "programs_at_once", lambda: None)
     whole = run_study(study, tmp_path / "whole", progress=False, log=lambda s: None)
     logs = []
-    monkeypatch.setattr(program_batches, "programs_at_once", lambda: 2)
+    monkeypatch.setattr(program_batches, "programs_at_once", lambda: 3)
     batched = run_study(study, tmp_path / "batched", progress=False, log=logs.append)
-    # 2 scenes x 3 variants, each a sequence and a single-frame program: 6 batches of 2
+    # 2 scenes x 3 variants, each an instrumented and an images-only sequence program and a
+    # single-frame program: 6 batches of 3
     assert any("6 batches" in line for line in logs), logs
-    assert sum("compiled or loaded 2 program(s)" in line for line in logs) == 6, logs
+    assert sum("compiled or loaded 3 program(s)" in line for line in logs) == 6, logs
     assert batched.computed == whole.computed == 6
     a, b = _rows(tmp_path / "whole"), _rows(tmp_path / "batched")
     assert len(a) == len(b) == 18
