@@ -39,6 +39,8 @@ params = { k = 1 }
 warmup = 0
 repeats = 1
 single_frame = false
+# The times are not the subject: one program per variant, its counts and views timed too.
+outputs = "all"
 [[pipelines]]
 preset = "dacs_threshold_sweep"
 """

@@ -46,6 +46,8 @@ scenes = [{{ name = "spheres", params = {{ rows = 1, cols = 2 }} }}]
 warmup = 0
 repeats = 1
 single_frame = false
+# The times are not the subject: one program per variant, its counts and views timed too.
+outputs = "all"
 [reference]
 pipeline = "deferred"
 [[pipelines]]

@@ -32,6 +32,8 @@ check_convergence = false
 warmup = 0
 repeats = 1
 single_frame = false
+# The times are not the subject: one program per variant, its counts and views timed too.
+outputs = "all"
 
 [[pipelines]]
 type = "checkerboard"

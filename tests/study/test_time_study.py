@@ -32,6 +32,8 @@ def test_time_follows_work_tiny(tmp_path, monkeypatch):
     res = run_study(study, tmp_path / "out", progress=False, log=lambda *_: None)
     assert len(res.rows) == len(PIPELINES) * len(COSTS)
     for r in res.rows:
+        # Timed with the images alone (the default), counted by the instrumented program
+        assert r["timed_outputs"] == "images" and r["compile_ms_timed"] > 0, r
         assert r["shader_cost"] == r["params"]["shader_cost"], r
         assert r["shading_work"] == r["shade_invocations"] * (1 + r["shader_cost"]), r
     by_cost = {(r["pipeline"], r["shader_cost"]): r for r in res.rows}
