@@ -151,6 +151,8 @@ MALFORMED = [
     ("reference param type", BASE + '[reference]\nparams = { samples = 2.5 }\n',
      "reference.params.samples", "expected an integer"),
     ("timing repeats zero", BASE + "[timing]\nrepeats = 0\n", "timing.repeats", ">= 1"),
+    ("timing outputs unknown", BASE + '[timing]\noutputs = "counts"\n', "timing.outputs",
+     "expected one of 'images', 'all', got 'counts'"),
     ("too small for MSSIM", BASE.replace('"24x16"', '"24x8"'), "resolution",
      "MSSIM needs images of at least 11x11"),
     ("save_frames negative", "save_frames = [-1]\n" + BASE, "save_frames[0]", ">= 0"),

@@ -29,7 +29,10 @@ def test_time_follows_work_tiny(tmp_path, monkeypatch):
     assert {p.type for p in full.pipelines} >= {"deferred", "checkerboard", "dacs",
                                                 "object_space", "visbuffer", "forward"}
     study = _tiny(full)
-    res = run_study(study, tmp_path / "out", progress=False, log=lambda *_: None)
+    lines: list = []
+    res = run_study(study, tmp_path / "out", progress=False, log=lines.append)
+    summary = next(ln for ln in lines if ln.startswith("pipeline"))
+    assert "time ms: per frame, timed with the images alone" in summary, summary
     assert len(res.rows) == len(PIPELINES) * len(COSTS)
     for r in res.rows:
         # Timed with the images alone (the default), counted by the instrumented program
