@@ -43,7 +43,7 @@ def _fields(pts) -> list:
     return out
 
 
-def variants(scene, camera, vis, n: int) -> dict:
+def variants(camera, vis, n: int) -> dict:
     tri = vis.tri_id.reshape(-1)
     flat = [a.reshape(n, 3) for a in (vis.bary, vis.dbary_dx, vis.dbary_dy)]
     active = tri >= 0
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
         cfg = make_config("deferred", width=w, height=h)
         vis = jax.jit(lambda s, c: visibility(s, c, cfg))(scene, camera)
         progs = {k: jax.jit(f).lower(scene).compile()
-                 for k, f in variants(scene, camera, vis, w * h).items()}
+                 for k, f in variants(camera, vis, w * h).items()}
         best = {k: float("inf") for k in progs}
         for _ in range(a.rounds):
             for k, prog in progs.items():

@@ -83,11 +83,15 @@ def main(argv=None) -> int:
     ap.add_argument("--checksum", action="store_true",
                     help="add each sequence's image sum and shading count to its row, to show "
                          "that two variants (XLA flags, trees) rendered the same frames")
-    ap.add_argument("--outputs", choices=("images", "all"), default="images",
+    ap.add_argument("--outputs", choices=("images", "all"), default=None,
                     help="what the timed programs return: the images alone (the default; XLA "
                          "drops the counts' and views' work), or the counts and views too (as "
-                         "before the twenty-fourth session; an older tree knows only this)")
+                         "before the twenty-fourth session; the default for an older tree)")
     a = ap.parse_args(argv)
+    a.outputs = a.outputs or ("images" if hasattr(program, "OUTPUTS") else "all")
+    if a.checksum and a.outputs == "images":
+        ap.error("--checksum sums each sequence's shading count, which an images-only program "
+                 "does not return: add --outputs all")
     w, h = a.resolution
     names = a.pipelines or [p.name for p in list_pipelines()]
     env = environment()

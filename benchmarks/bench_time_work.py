@@ -34,6 +34,14 @@ DEFAULT_PIPELINES = ("visibility", "forward", "forward:z_prepass=true", "deferre
 SINGLE_COST = ("visibility", "reference")  # measured at the first cost only
 
 
+def default_outputs() -> str:
+    """"images" where the tree on the path can time a program without its counts, else
+    "all" (a tree from before the twenty-fourth session)."""
+    from jaxrender.pipelines import program
+
+    return "images" if hasattr(program, "OUTPUTS") else "all"
+
+
 def visibility_program(scene, camera, cfg):
     from jaxrender.pipelines.visibility import visibility
 
@@ -68,7 +76,7 @@ def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repe
     per = max(frames, 1)
     name, params = parse_spec(spec, "--pipelines")
     row = dict(scene=scene_name, pipeline=spec, shader_cost=cost, resolution=f"{width}x{height}",
-               frames=frames, outputs=outputs)
+               frames=frames)
     t0 = time.perf_counter()
     if name == "visibility":
         cfg = make_config("deferred", width=width, height=height)
@@ -79,12 +87,15 @@ def measure(scene_name: str, spec: str, cost: int, width: int, height: int, repe
         return dict(row, median_ms=median / per, min_ms=min(samples) / per, shade_invocations=0)
     cfg = make_config(name, width=width, height=height, **params)
     pipe = get_pipeline(name)
+    row["outputs"] = outputs
     call, _ = program.compile(pipe, scene, cams, cfg, sequence=bool(frames))
     row["compile_s"] = time.perf_counter() - t0
     if outputs == "images":  # timed with the images alone; the counts from one call of `call`
         frame = block(call(scene, cams))
+        t0 = time.perf_counter()
         call, _ = program.compile(pipe, scene, cams, cfg, sequence=bool(frames),
                                   outputs="images")
+        row["compile_timed_s"] = time.perf_counter() - t0
     frame_or_image, median, samples = time_call(call, scene, cams, repeats=repeats, warmup=2)
     frame = frame if outputs == "images" else frame_or_image
     counts = {k: float(np.mean(np.asarray(v))) for k, v in frame.counts.items()
@@ -121,11 +132,12 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=0,
                     help="time each frame inside a sequence of this many frames (how studies "
                          "time a frame); 0: single-frame calls")
-    ap.add_argument("--outputs", choices=("images", "all"), default="images",
+    ap.add_argument("--outputs", choices=("images", "all"), default=None,
                     help="what the timed program returns: the images alone (the default), or "
                          "the counts and views too (as every time before the twenty-fourth "
-                         "session, and the only choice for an older tree)")
+                         "session; the default for an older tree, which knows no other)")
     a = ap.parse_args(argv)
+    a.outputs = a.outputs or default_outputs()
     w, h = a.resolution
     t_start = time.time()
     print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)

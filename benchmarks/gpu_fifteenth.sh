@@ -46,7 +46,7 @@ for part in "$@"; do
       --scope sorted_blend --scope shade --scope fragments
     grep -h "^## \|^scope" "$OUT/profile.md"
   elif [ "$part" = forward ]; then
-    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --outputs all"
     F="--frames 16 --rounds 5 --scenes room foliage thin terrain --pipelines forward deferred"
     for t in after v14; do
       if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
@@ -54,7 +54,7 @@ for part in "$@"; do
         | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/forward.jsonl"
     done
   elif [ "$part" = reference ]; then
-    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --outputs all"
     R="--frames 2 --rounds 3 --pipelines reference"
     for t in ${REF_TREES:-after ref_chunks v14}; do
       if [ $t = after ]; then T=$PWD; else T=$PWD/.v/$t; fi
@@ -62,7 +62,7 @@ for part in "$@"; do
         2>&1 | quiet | grep '^{' | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/reference.jsonl"
     done
   elif [ "$part" = glass ]; then
-    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --outputs all"
     G="--frames 16 --rounds 5 --scenes glass"
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 $S $G --pipelines forward deferred visbuffer \
       checkerboard dacs object_space deferred:chunk=1048576 deferred:chunk=4194304 \
@@ -75,7 +75,7 @@ for part in "$@"; do
       --pipelines deferred forward 2>&1 | quiet | grep '^{' \
       | sed 's/^{/{"tree": "blend_loop", /' | tee -a "$OUT/glass.jsonl"
   elif [ "$part" = chunks ]; then
-    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080"
+    S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --outputs all"
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 $S --frames 16 --rounds 5 --scenes room foliage \
       --pipelines deferred deferred:chunk=1048576 forward forward:chunk=1048576 2>&1 | quiet \
       | grep '^{' | sed 's/^{/{"tree": "after", /' | tee -a "$OUT/chunks.jsonl"

@@ -19,7 +19,7 @@
 . "$(dirname "$0")/gpu_env.sh"
 root_of() { if [ "$1" = after ]; then echo "$PWD"; else echo "$PWD/.v/$1"; fi; }
 tag() { sed "s/^{/{\"tree\": \"$1\", /"; }
-S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution ${RES:-1920x1080}"
+S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution ${RES:-1920x1080} --outputs all"
 for part in "$@"; do
   if [ "$part" = reference ]; then
     specs=""

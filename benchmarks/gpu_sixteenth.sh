@@ -21,7 +21,7 @@
 # reads: deferred on glass profiled (its device-to-host copies counted by the profile), to
 #   check the CPU count of 48 reads a frame at 1920x1080.
 . "$(dirname "$0")/gpu_env.sh"
-S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 16"
+S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --frames 16 --outputs all"
 PIPES="forward deferred visbuffer checkerboard dacs object_space tads"
 modes() {
   for m in loop blocks switch; do

@@ -33,7 +33,7 @@ for part in "$@"; do
   elif [ "$part" = sequence ]; then
     for t in ${TREES:-after v0}; do
       export PYTHONPATH=$(root_of "$t"):/tmp/site
-      S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution ${RES:-1920x1080}"
+      S="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution ${RES:-1920x1080} --outputs all"
       timeout -k 5 200 $S --frames 16 --rounds 5 --scenes ${SEQ_SCENES:-room foliage spheres thin} \
         --pipelines ${PIPELINES:-forward deferred dacs visbuffer} 2>&1 | quiet | grep '^{' \
         | tag "$t" | tee -a "$OUT/sequence.jsonl"

@@ -45,7 +45,7 @@ for part in "$@"; do
         2>&1 | quiet | tee -a "$OUT/cost_layers.md"
       PYTHONPATH=$R:/tmp/site timeout -k 5 170 python3 benchmarks/bench_time_work.py \
         --scenes foliage --frames 8 --costs 0 256 --repeats 5 --budget 150 --label $t \
-        --out "$OUT/time_work.jsonl" --pipelines visibility deferred checkerboard dacs forward \
+        --out "$OUT/time_work.jsonl" --outputs all --pipelines visibility deferred checkerboard dacs forward \
         visbuffer tads object_space 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/fits.md"
     done
   elif [ "$part" = os ]; then

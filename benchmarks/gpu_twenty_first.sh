@@ -39,7 +39,7 @@ for part in "$@"; do
       if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
       PYTHONPATH=$R:/tmp/site timeout 270 python3 benchmarks/bench_time_work.py \
         --scenes foliage room --frames 8 --costs 0 256 --repeats 5 --budget 240 --label "$t" \
-        --pipelines deferred object_space forward --out "$OUT/shared.jsonl" \
+        --pipelines deferred object_space forward --out "$OUT/shared.jsonl" --outputs all \
         2>&1 | quiet | grep -v '^{' | sed "s/^/$t: /" | tee -a "$OUT/shared.md"
     done
   fi

@@ -136,7 +136,8 @@ def compile_job(payload: bytes) -> bytes:
         import sys
 
         print(f"TIMELINE pid={os.getpid()} {job.source} {type(job.cfg).__name__} "
-              f"sequence={job.sequence} outputs={job.outputs} start={started:.2f} scene_s={t0 - t_start:.2f} "
+              f"sequence={job.sequence} outputs={job.outputs} start={started:.2f} "
+              f"scene_s={t0 - t_start:.2f} "
               f"prepare_s={t_prepared - t0:.2f} compile_s={t_end - t_prepared:.2f} "
               f"stored={stored} end={started + t_end - t_start:.2f}", file=sys.stderr,
               flush=True)

@@ -1,8 +1,8 @@
 """Where a study's independent work runs: its (scene, pipeline variant) groups spread over the
 local devices, and over hosts when JAX's distributed runtime is initialized.
 
-A group is every sequence of one scene and one variant (all its camera paths, each a sequence
-program, and its single-frame program): one device compiles and runs all of it, so a variant's
+A group is every sequence of one scene and one variant (all its camera paths, each with the
+programs of ``programs.roles``): one device compiles and runs all of it, so a variant's
 programs compile once. Groups go to devices greedily by rendered frames, heaviest first, ties
 by name: the assignment depends on the study only, so a rerun (resuming) puts a group where it
 ran before. Over several processes (``jax.distributed.initialize()``, one process per host)

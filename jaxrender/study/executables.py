@@ -203,9 +203,9 @@ def _environment() -> dict:
 
 def program_key(pipe, fixed, args, device=None) -> str | None:
     """The store's key of the program with static jit arguments ``fixed`` (pipeline, static
-    config, mode, outputs) and dynamic arguments ``args`` (``program.arguments``); None when the store
-    is off or the program cannot be named without tracing (an argument that is no array, a
-    static value whose repr is an address)."""
+    config, mode, outputs) and dynamic arguments ``args`` (``program.arguments``); None when
+    the store is off or the program cannot be named without tracing (an argument that is no
+    array, a static value whose repr is an address)."""
     if not enabled():
         return None
     _, static_cfg, mode, outputs = fixed

@@ -91,7 +91,8 @@ def run_study(study: Study, out_dir, *, force: bool = False, progress: bool = Tr
     store.export_csv(rows, out_dir / "results.csv")
     summ = summary.summarize(rows)
     summary.write_summary(summ, out_dir / "summary.csv")
-    log(summary.format_summary(summ) + "\n" + summary.time_note(rows))
+    note = summary.time_note(rows)
+    log(summary.format_summary(summ) + (f"\n{note}" if note else ""))
     fits = time_series.fit_series(rows)
     if fits:  # the study sweeps shader_cost
         time_series.write_csv(fits, out_dir / "time_fits.csv")
@@ -321,6 +322,8 @@ def _match_one(study: Study, st, ctx, key: str, entry, m, seq: str) -> list[dict
         v = Variant(m.label, entry.type, tuple(sorted({**dict(template.params),
                                                          param: value}.items())))
         run = type(progs)(*(p and retargeted(p, study, v) for p in progs))
+        if not save and m.on not in TIME_COLUMNS:  # a probe's time is not kept
+            run = run._replace(timed=None)
         return run_sequence(study if save else quick, scene, spec, path, cams, v, refs, env,
                             out_dir, compiled=run, seq=seq, save_images=save)
 

@@ -1,7 +1,8 @@
 """One sequence of a study: a scene, a camera path and a pipeline variant rendered as one
-``render_sequence`` program, timed (with its single-frame program), scored frame by frame
-against the cached references, with the saved frames' small npz files for the figures.
-``runner`` runs the whole study out of these.
+``render_sequence`` program, timed (that program or its images-only twin, and the
+single-frame program: ``programs.roles``), scored frame by frame against the cached
+references, with the saved frames' small npz files for the figures. ``runner`` runs the
+whole study out of these.
 """
 
 from __future__ import annotations
@@ -51,13 +52,16 @@ def _small(a) -> np.ndarray:
 
 def sequence_key(study: Study, spec, path, variant) -> str:
     """The rows' sequence key: everything a sequence's rows depend on (scene, path, variant,
-    resolution, reference, metrics, warm-up frames)."""
+    resolution, reference, metrics, warm-up frames, and what the timed program returns: a run
+    resumed over rows timed otherwise computes them again rather than mix the two)."""
     ref = study.reference
+    # Rows timed with the counts (the only way before [timing] outputs) keep their keys.
+    timed = [] if study.timing.outputs == "all" else [study.timing.outputs]
     return store.seq_key(
         [spec.source, spec.params, spec.file_hash], [path.name, path.type, path.frames,
                                                      path.params],
         [variant.label, variant.type, variant.params_json], study.resolution,
-        [ref.pipeline, ref.params], sorted(study.metrics), study.warmup_frames,
+        [ref.pipeline, ref.params], sorted(study.metrics), study.warmup_frames, *timed,
     )
 
 

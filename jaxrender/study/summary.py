@@ -53,12 +53,12 @@ def format_summary(summary: list[dict]) -> str:
 def time_note(rows: list[dict]) -> str:
     """What the rows' ``time_ms`` measured, by their ``timed_outputs`` ([timing] outputs)."""
     kinds = {r.get("timed_outputs", "all") for r in rows}
+    if not kinds:
+        return ""
     if kinds == {"images"}:
-        return ("time ms: per frame, timed with the images alone as outputs (the counts "
-                "come from a second program)")
+        return "time ms: per frame, timed with the images alone (counts from a second program)"
     if kinds == {"all"}:
-        return ("time ms: per frame, timed with the counts and views among the outputs "
-                "([timing] outputs = \"all\"): they add to it")
+        return "time ms: per frame, the counts and views timed too ([timing] outputs = \"all\")"
     return "time ms: some rows timed the images alone, others with the counts and views"
 
 

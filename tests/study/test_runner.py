@@ -215,3 +215,29 @@ def test_real_metrics(fake, tiny_study, tmp_path, monkeypatch):
     fine = [r["psnr"] for r in res.rows if r["params"] == {"levels": 16}]
     assert max(coarse) < min(fine)  # fewer quantisation levels, lower PSNR
 
+
+
+def test_rows_timed_otherwise_are_not_resumed(tiny_study, tmp_path):
+    """A run resumed with another [timing] outputs computes its sequences again rather than
+    mix times with and without the counts; rows timed with them keep their old keys."""
+    from jaxrender.study.sequence_run import sequence_key
+
+    study = load_study(tiny_study)
+    spec, path, variant = study.scenes[0], study.paths[0], study.variants[0]
+    keys = {o: sequence_key(dataclasses.replace(
+        study, timing=dataclasses.replace(study.timing, outputs=o)), spec, path, variant)
+        for o in ("images", "all")}
+    assert keys["images"] != keys["all"]
+    legacy = store.seq_key(
+        [spec.source, spec.params, spec.file_hash], [path.name, path.type, path.frames,
+                                                     path.params],
+        [variant.label, variant.type, variant.params_json], study.resolution,
+        [study.reference.pipeline, study.reference.params], sorted(study.metrics),
+        study.warmup_frames)
+    assert keys["all"] == legacy, "rows timed with the counts changed their key"
+    first = run_study(study, tmp_path / "run", progress=False, log=lambda *_: None)
+    assert {r["timed_outputs"] for r in first.rows} == {"images"}
+    other = dataclasses.replace(study, timing=dataclasses.replace(study.timing, outputs="all"))
+    again = run_study(other, tmp_path / "run", progress=False, log=lambda *_: None)
+    assert again.skipped == 0 and again.computed == first.computed
+    assert {r["timed_outputs"] for r in again.rows} == {"all"}
