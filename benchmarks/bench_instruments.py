@@ -1,5 +1,6 @@
 """What a frame's counts and views cost: each pipeline's sequence program timed with all its
-outputs (as studies and ``bench_sequence.py`` time it) and with its images alone.
+outputs (as studies and ``bench_sequence.py`` timed it before the twenty-fourth session) and
+with its images alone (as they time it now, ``program.OUTPUTS``).
 
     python benchmarks/bench_instruments.py --scenes thin foliage room --resolution 1920x1080
 
@@ -35,11 +36,13 @@ def programs(name: str, scene, path, width: int, height: int):
     """(all outputs, images only) compiled, and their arguments; raises PipelineOverflow
     if the sequence overflows a capacity."""
     pipe, cfg = REGISTRY[name], make_config(name, width=width, height=height)
-    fixed, args, _ = program.arguments(pipe, scene, path, cfg, sequence=True)
-    fn = program.unjitted(fixed)
-    every = jax.jit(fn).lower(*args).compile()
+    compiled = []
+    for outputs in ("all", "images"):  # the same dynamic arguments: the static ones differ
+        fixed, args, _ = program.arguments(pipe, scene, path, cfg, sequence=True,
+                                           outputs=outputs)
+        compiled.append(jax.jit(program.unjitted(fixed)).lower(*args).compile())
+    every, images = compiled
     program.check_overflow(pipe, cfg, every(*args))
-    images = jax.jit(lambda *a: fn(*a).image).lower(*args).compile()
     return every, images, args
 
 

@@ -180,9 +180,10 @@ def cmd_render(a) -> int:
     if a.json:
         print(json.dumps({"image": str(out), "scene": a.scene, "pipeline": a.pipeline,
                           "params": params, "width": w, "height": h, "time_ms": ms,
-                          "compile_ms": comp.compile_ms, "counts": counts}, sort_keys=True))
+                          "timed_outputs": "all", "compile_ms": comp.compile_ms,
+                          "counts": counts}, sort_keys=True))
     else:
-        print(f"wrote {out} ({w}x{h}, {a.pipeline}, {ms:.2f} ms)")
+        print(f"wrote {out} ({w}x{h}, {a.pipeline}, {ms:.2f} ms with the counts)")
         for k in sorted(counts):
             print(f"  {k}: {counts[k]}")
     return 0
@@ -322,7 +323,8 @@ def _add_inspection(sub) -> None:
 def _add_render(sub) -> None:
     s = sub.add_parser("render", help="render one frame to a PNG", description=(
         "Render one frame of SCENE from its default camera with one pipeline, write the image "
-        "and print the counts."))
+        "and print the counts. The time is the single-frame program's with its counts and "
+        "views (a study times the images alone, see [timing] outputs)."))
     s.add_argument("scene", help="a built-in scene name or a scene TOML file")
     s.add_argument("--pipeline", required=True, help="a registered pipeline type")
     s.add_argument("--set", action="append", metavar="KEY=VALUE",
