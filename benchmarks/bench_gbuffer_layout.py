@@ -25,22 +25,12 @@ import jax.numpy as jnp
 from jaxrender.fusion import materialize_all
 from jaxrender.parsing import resolution_arg
 from jaxrender.pipelines import make_config
-from jaxrender.pipelines.gbuffer import GBUFFER_CHANNELS, GBUFFER_LAYOUT, pack_gbuffer
+from jaxrender.pipelines.gbuffer import GBUFFER_CHANNELS, gbuffer_fields, pack_gbuffer
 from jaxrender.pipelines.visibility import visibility
 from jaxrender.scene import default_camera
 from jaxrender.shading import load_lit_scene
 from jaxrender.shading.surface import surface_points
 from jaxrender.timing import device_description
-
-
-def _fields(pts) -> list:
-    out = []
-    for name, _ in GBUFFER_LAYOUT:
-        v = getattr(pts, name)
-        if name == "material":
-            v = jax.lax.bitcast_convert_type(v.astype(jnp.int32), jnp.float32)[:, None]
-        out.append(v)
-    return out
 
 
 def variants(camera, vis, n: int) -> dict:
@@ -56,15 +46,16 @@ def variants(camera, vis, n: int) -> dict:
         return jnp.where(active.reshape(active.shape + (1,) * (v.ndim - 1)), v, 0.0)
 
     def planes(s):
-        return [keep(c) for v in _fields(points(s)) for c in jnp.split(v, v.shape[1], axis=1)]
+        fields = gbuffer_fields(points(s))
+        return [keep(c) for v in fields for c in jnp.split(v, v.shape[1], axis=1)]
 
     return {
         "rows (concatenated)": lambda s: keep(pack_gbuffer(points(s))),
-        "one array a field": lambda s: tuple(keep(v) for v in _fields(points(s))),
+        "one array a field": lambda s: tuple(keep(v) for v in gbuffer_fields(points(s))),
         "one plane a channel": lambda s: tuple(p[:, 0] for p in planes(s)),
         "planes stacked": lambda s: jnp.concatenate([p.T for p in planes(s)], axis=0),
         "fields stored, then rows": lambda s: keep(jnp.concatenate(
-            materialize_all(*_fields(points(s))), axis=1)),
+            materialize_all(*gbuffer_fields(points(s))), axis=1)),
     }
 
 

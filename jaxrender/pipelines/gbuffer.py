@@ -23,15 +23,21 @@ PIXEL_BYTES = GBUFFER_CHANNELS * 4
 DEPTH_BYTES = 4  # the depth buffer (D32F) written by the same pass
 
 
-def pack_gbuffer(pts: SurfacePoints) -> Array:
-    """SurfacePoints [N] -> float32[N, GBUFFER_CHANNELS] in GBUFFER_LAYOUT order."""
+def gbuffer_fields(pts: SurfacePoints) -> list[Array]:
+    """SurfacePoints [N] -> the GBUFFER_LAYOUT fields, float32[N, channels] each (material
+    ids bit for bit)."""
     cols = []
     for name, _ in GBUFFER_LAYOUT:
         v = getattr(pts, name)
         if name == "material":
             v = jax.lax.bitcast_convert_type(v.astype(jnp.int32), jnp.float32)[:, None]
         cols.append(v)
-    return jnp.concatenate(cols, axis=-1)
+    return cols
+
+
+def pack_gbuffer(pts: SurfacePoints) -> Array:
+    """SurfacePoints [N] -> float32[N, GBUFFER_CHANNELS] in GBUFFER_LAYOUT order."""
+    return jnp.concatenate(gbuffer_fields(pts), axis=-1)
 
 
 def unpack_gbuffer(rows: Array, camera, live: Array) -> SurfacePoints:

@@ -29,7 +29,7 @@ CSV_COLUMNS = (
     "scene", "camera_path", "pipeline", "params", "frame",
     "rmse", "psnr", "mssim", "flip", "delta_e", "temporal_error",
     "shade_invocations", "helper_lanes", "covered_pixels", "shader_cost", "shading_work",
-    "time_ms",
+    "time_ms", "timed_outputs",
     "compile_ms", "pipeline_type", "width", "height", "finite", "device", "jax_version", "seq",
 )
 
