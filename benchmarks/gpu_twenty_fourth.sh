@@ -4,6 +4,7 @@
 #   bash benchmarks/gpu_twenty_fourth.sh scenes2          (about 7 minutes)
 #   bash benchmarks/gpu_twenty_fourth.sh fits             (about 6 minutes; ran 2026-12-06)
 #   bash benchmarks/gpu_twenty_fourth.sh gbuffer roomfits  (about 8 minutes; not yet run)
+#   bash benchmarks/gpu_twenty_fourth.sh fits4            (about 6 minutes; not yet run)
 # Every pipeline's time here is of a program that returns the images alone (`--outputs
 # images`, the new default of the benches and studies): the counts and views are no longer
 # part of a frame. (The visibility pass and the G-buffer layouts have no counts to leave out.)
@@ -15,6 +16,9 @@
 # fits: frame time against shading work at shader costs 0 and 256 on foliage and room (8-frame
 #   pans), each pipeline's fixed cost and slope without the counts (room's rows but forward's
 #   ran out of the budget: roomfits runs them).
+# fits4: deferred, the visibility buffer and object space on foliage at four shader costs (0,
+#   64, 256, 1024): with two costs their slopes (0.60x and 2.29x deferred's) have no standard
+#   error; four tell a slope from noise and check the line is one.
 # gbuffer: deferred's attribute pass in five G-buffer layouts on room and glass
 #   (bench_gbuffer_layout.py). Today's rows are one 0.55 ms concatenation kernel on an H100;
 #   prediction: one array a field, or the fields stored before the rows are packed, at least
@@ -44,6 +48,11 @@ for part in "$@"; do
       --pipelines deferred checkerboard dacs tads visbuffer object_space --costs 0 64 \
       --frames 8 --repeats 5 --budget 280 --out "$OUT/roomfits.jsonl" 2>&1 \
       | quiet | grep -v '^{' | tee -a "$OUT/roomfits.md"
+  elif [ "$part" = fits4 ]; then
+    timeout -k 5 400 python3 benchmarks/bench_time_work.py --scenes foliage \
+      --pipelines deferred visbuffer object_space --costs 0 64 256 1024 --frames 8 \
+      --repeats 5 --budget 360 --out "$OUT/fits4.jsonl" 2>&1 \
+      | quiet | grep -v '^{' | tee -a "$OUT/fits4.md"
   elif [ "$part" = gbuffer ]; then
     timeout -k 5 150 python3 benchmarks/bench_gbuffer_layout.py --scenes room glass 2>&1 \
       | quiet | tee -a "$OUT/gbuffer.md"
