@@ -97,6 +97,15 @@ def pareto_front(points) -> list[tuple[float, float]]:
     return front
 
 
+def time_label(rows) -> str:
+    """The time axis's label, with what the timed programs returned (the rows'
+    ``timed_outputs``; rows from before it are timed with their counts)."""
+    kinds = {r.get("timed_outputs", "all") for r in rows}
+    what = {"images": ", images only", "all": ", counts included"}.get(
+        kinds.pop() if len(kinds) == 1 else "", "")
+    return f"time per frame (ms, median{what})"
+
+
 def pareto_table(run: Run, scene: str, x: str) -> dict:
     rows = [r for r in run.rows if r["scene"] == scene]
     by_label: dict = {}
@@ -112,7 +121,7 @@ def pareto_table(run: Run, scene: str, x: str) -> dict:
         points += list(zip(xs, ys))
     finite_x = [p[0] for p in points if math.isfinite(p[0]) and p[0] > 0]
     logx = bool(finite_x) and max(finite_x) / min(finite_x) > 20
-    xlabel = {"time_ms": "time per frame (ms, median)",
+    xlabel = {"time_ms": time_label(rows),
               "shade_invocations": "shader invocations per frame"}.get(x, x)
     return {"title": f"{scene}: PSNR vs {xlabel.split(' (')[0]}", "xlabel": xlabel,
             "ylabel": "PSNR (dB)", "logx": logx, "device": run.device, "series": series,
@@ -305,7 +314,9 @@ def time_work_tables(run: Run) -> list[tuple[str, dict]]:
         out.append((f"{scene}__{path}", {
             "title": f"{scene} / {path}: time against shading work", "device": run.device,
             "xlabel": "shading work per frame (M layer evaluations: invocations x (1 + cost))",
-            "ylabel": "time per frame (ms, median)", "baseline": time_series.BASELINE,
+            "ylabel": time_label([r for r in run.rows if r["scene"] == scene
+                                  and r["camera_path"] == path]),
+            "baseline": time_series.BASELINE,
             "log": bool(all_work) and max(all_work) / min(all_work) > 20,
             "series": entries, "crossings": crossings}))
     return out

@@ -86,3 +86,11 @@ def test_pareto_front():
 def test_variant_name():
     assert data.variant_name("dacs", {}) == "dacs"
     assert data.variant_name("dacs", '{"threshold": 0.1}') == "dacs threshold=0.1"
+
+
+def test_time_label_says_what_was_timed():
+    base = "time per frame (ms, median"
+    assert data.time_label([{"timed_outputs": "images"}] * 2) == base + ", images only)"
+    # rows stored before timed_outputs existed were timed with their counts
+    assert data.time_label([{}, {"timed_outputs": "all"}]) == base + ", counts included)"
+    assert data.time_label([{"timed_outputs": "images"}, {}]) == base + ")", "mixed: no claim"
