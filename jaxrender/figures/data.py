@@ -16,7 +16,7 @@ import numpy as np
 
 from jaxrender.metrics import to_display
 from jaxrender.study import store, time_series
-from jaxrender.study.summary import SUMMARY_COLUMNS, summarize
+from jaxrender.study.summary import SUMMARY_COLUMNS, summarize, timed_as
 
 # aux names a pipeline may put in Frame.aux for the figures, in order of preference
 DACS_LEVEL_KEYS = ("level", "dacs_level", "decision_level")
@@ -100,9 +100,7 @@ def pareto_front(points) -> list[tuple[float, float]]:
 def time_label(rows) -> str:
     """The time axis's label, with what the timed programs returned (the rows'
     ``timed_outputs``; rows from before it are timed with their counts)."""
-    kinds = {r.get("timed_outputs", "all") for r in rows}
-    what = {"images": ", images only", "all": ", counts included"}.get(
-        kinds.pop() if len(kinds) == 1 else "", "")
+    what = {"images": ", images only", "all": ", counts included"}.get(timed_as(rows), "")
     return f"time per frame (ms, median{what})"
 
 

@@ -8,9 +8,8 @@ sequence with a number of warm-up frames to drop) and the outputs (``"all"``: im
 and views; ``"images"``: the images and the overflow count alone, so that XLA drops every
 computation only the counts and views read, which is what a timed frame should cost); the
 scene, the pipeline's prepared static data, the cameras and the traced config fields are its
-arguments. So moving the camera or
-sweeping a traced field never recompiles, and a sequence compiles once per (scene shape, path
-length, config).
+arguments. So moving the camera or sweeping a traced field never recompiles, and a sequence
+compiles once per (scene shape, path length, config).
 
 ``lower`` and ``bind`` split the ahead-of-time path in two picklable halves (the study compiles
 in worker processes); ``compile`` joins them. Every result passes ``check_overflow``: a frame

@@ -50,16 +50,23 @@ def format_summary(summary: list[dict]) -> str:
     return "\n".join([fmt(heads), fmt(["-" * w for w in widths])] + [fmt(r) for r in lines])
 
 
+def timed_as(rows) -> str | None:
+    """What every row's ``time_ms`` timed: "images", "all" (rows stored before
+    ``timed_outputs`` existed were timed with their counts), or None for no rows or a mix."""
+    kinds = {r.get("timed_outputs", "all") for r in rows}
+    return kinds.pop() if len(kinds) == 1 else None
+
+
+TIME_NOTES = {
+    "images": "time ms: per frame, timed with the images alone (counts from a second program)",
+    "all": 'time ms: per frame, the counts and views timed too ([timing] outputs = "all")',
+    None: "time ms: some rows timed the images alone, others with the counts and views",
+}
+
+
 def time_note(rows: list[dict]) -> str:
     """What the rows' ``time_ms`` measured, by their ``timed_outputs`` ([timing] outputs)."""
-    kinds = {r.get("timed_outputs", "all") for r in rows}
-    if not kinds:
-        return ""
-    if kinds == {"images"}:
-        return "time ms: per frame, timed with the images alone (counts from a second program)"
-    if kinds == {"all"}:
-        return "time ms: per frame, the counts and views timed too ([timing] outputs = \"all\")"
-    return "time ms: some rows timed the images alone, others with the counts and views"
+    return TIME_NOTES[timed_as(rows)] if rows else ""
 
 
 def _fmt(v: float, col: str) -> str:
