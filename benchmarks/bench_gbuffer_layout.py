@@ -1,15 +1,15 @@
 """Deferred's attribute pass in several G-buffer layouts, over the whole screen as deferred
 runs it on a mostly covered scene (``shade_dense`` in place): the points' 20 channels packed
-into rows (``pack_gbuffer``'s concatenation, today's layout), one array per field, one plane
-per channel, the planes stacked, and the fields stored (``fusion.materialize_all``) before the
-rows are packed.
+into rows (the layout before the twenty-fifth session), one array per field
+(``gbuffer_fields``, the layout since), one plane per channel, the planes stacked, and the
+fields stored (``fusion.materialize_all``) before the rows are packed.
 
     python benchmarks/bench_gbuffer_layout.py --scenes room glass --resolution 1920x1080
 
-On an H100 the concatenation is one kernel of 0.55 ms on room and on glass (RESULTS.md,
-twenty-fourth session), several times what writing 20 channels of 1080p costs: each output
-element recomputes its channel's interpolation, and XLA cannot share work between the threads
-of one row. Each variant's median ms of 20 calls, alternated over 3 rounds.
+On an H100 the concatenation was one kernel of 0.55 ms on room and on glass (RESULTS.md,
+twenty-fourth session), several times what writing 20 channels of 1080p costs; one array a
+field took 0.58x the rows' time (twenty-fifth session). Each variant's median ms of 20 calls,
+alternated over 3 rounds.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import jax.numpy as jnp
 from jaxrender.fusion import materialize_all
 from jaxrender.parsing import resolution_arg
 from jaxrender.pipelines import make_config
-from jaxrender.pipelines.gbuffer import GBUFFER_CHANNELS, gbuffer_fields, pack_gbuffer
+from jaxrender.pipelines.gbuffer import GBUFFER_CHANNELS, gbuffer_fields
 from jaxrender.pipelines.visibility import visibility
 from jaxrender.scene import default_camera
 from jaxrender.shading import load_lit_scene
@@ -50,7 +50,7 @@ def variants(camera, vis, n: int) -> dict:
         return [keep(c) for v in fields for c in jnp.split(v, v.shape[1], axis=1)]
 
     return {
-        "rows (concatenated)": lambda s: keep(pack_gbuffer(points(s))),
+        "rows (concatenated)": lambda s: keep(jnp.concatenate(gbuffer_fields(points(s)), 1)),
         "one array a field": lambda s: tuple(keep(v) for v in gbuffer_fields(points(s))),
         "one plane a channel": lambda s: tuple(p[:, 0] for p in planes(s)),
         "planes stacked": lambda s: jnp.concatenate([p.T for p in planes(s)], axis=0),

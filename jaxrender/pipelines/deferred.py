@@ -20,8 +20,8 @@ import jax.numpy as jnp
 import jaxrender.pipelines.dispatch as dispatch
 import jaxrender.raster.samples as sample_patterns
 from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
-from jaxrender.pipelines.gbuffer import (DEPTH_BYTES, GBUFFER_CHANNELS, PIXEL_BYTES,
-                                         pack_gbuffer, unpack_gbuffer)
+from jaxrender.pipelines.gbuffer import (DEPTH_BYTES, PIXEL_BYTES, empty_gbuffer,
+                                         gbuffer_entries, gbuffer_fields, unpack_gbuffer)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
 from jaxrender.pipelines.transparency import merge_counts, refuse_transparency, transparent_pass
@@ -66,14 +66,14 @@ class LightingPlan(NamedTuple):
 
 def gbuffer_pass(scene, camera, vis, n_samples: int, cfg):
     """The attribute pass: every covered sample's G-buffer row, through ``dispatch.shade_screen``.
-    Returns (float32[S * P, GBUFFER_CHANNELS], its WorkList)."""
+    Returns (the G-buffer's fields, float32[S * P, channels] each, and its WorkList)."""
     n = n_samples * cfg.width * cfg.height
     tri = vis.tri_id.reshape(-1)
     flat = lambda a: a.reshape(n, 3)  # noqa: E731
     bary, ddx, ddy = flat(vis.bary), flat(vis.dbary_dx), flat(vis.dbary_dy)
     return dispatch.shade_screen(
         tri >= 0, lambda it: surface_points(scene, camera, tri[it], bary[it], ddx[it], ddy[it]),
-        pack_gbuffer, jnp.zeros((n, GBUFFER_CHANNELS), jnp.float32), cfg.chunk)
+        gbuffer_fields, empty_gbuffer(n), cfg.chunk)
 
 
 def lighting_plan(vis, n_samples: int, cfg: DeferredConfig) -> LightingPlan:
@@ -118,8 +118,9 @@ def frame(scene, camera, cfg: DeferredConfig) -> Frame:
     with jax.named_scope("lighting"):
         lit, lighting = dispatch.shade_screen(
             plan.active.reshape(-1),
-            lambda it: unpack_gbuffer(gbuf[it], camera, jnp.ones(it.shape, bool)),
-            lambda pts: shade(pts, scene), jnp.zeros((gbuf.shape[0], 3), jnp.float32), cfg.chunk)
+            lambda it: unpack_gbuffer(gbuffer_entries(gbuf, it), camera, jnp.ones(it.shape, bool)),
+            lambda pts: shade(pts, scene), jnp.zeros((n_s * cfg.width * cfg.height, 3),
+                                                     jnp.float32), cfg.chunk)
     with jax.named_scope("resolve"):
         image = resolve_samples(lit, plan, cfg)
     image, blended = transparent_pass(scene, camera, image, vis.depth, cfg)

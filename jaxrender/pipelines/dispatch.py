@@ -166,10 +166,23 @@ def _chunks_of(count: Array, chunk: int) -> Array:
     return (count + chunk - 1) // chunk
 
 
+def _rows(out) -> int:
+    """The entries of ``out``: an array, or a tuple of arrays of one length (a G-buffer's
+    fields, each stored as its own array)."""
+    return jax.tree.leaves(out)[0].shape[0]
+
+
+def _scatter(acc, index: Array, vals, **kw):
+    """``acc[index] = vals`` leaf by leaf (out-of-range indices dropped)."""
+    return jax.tree.map(lambda a, v: a.at[index].set(v.astype(a.dtype), mode="drop", **kw),
+                        acc, vals)
+
+
 def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
         chunk: int, default_mode: str = DEFAULT_LAUNCH) -> tuple[Array, WorkList]:
     """For the live items of ``work``, write ``fn(items int32[L], live bool[L]) ->
     values[L, ...]`` into ``out[items]``, ``L`` lanes a launch (a multiple of ``chunk``).
+    ``out`` and the values may be matching tuples of arrays.
 
     Launches whole chunks covering the count (``launch_mode(default_mode)``); padding lanes
     are passed live=False and their results are discarded. ``chunk`` 0 picks ``auto_chunk``
@@ -183,13 +196,12 @@ def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
     # before the last chunk's end).
     span = chunk if mode in ("loop", "blocks") else chunk << max(max_chunks - 1, 0).bit_length()
     padded = jnp.concatenate([items, jnp.zeros((span,), items.dtype)])
-    sentinel = out.shape[0]  # out-of-range index: scatter drops the lane
+    sentinel = _rows(out)  # out-of-range index: scatter drops the lane
 
     def launch(start, size, acc):
         lane_items = jax.lax.dynamic_slice(padded, (start,), (size,))
         live = start + jnp.arange(size, dtype=jnp.int32) < n
-        vals = fn(lane_items, live)
-        return acc.at[jnp.where(live, lane_items, sentinel)].set(vals, mode="drop")
+        return _scatter(acc, jnp.where(live, lane_items, sentinel), fn(lane_items, live))
 
     out, launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch, out, mode)
     return out, WorkList(items, n, n, chunk, launched)
@@ -278,12 +290,13 @@ def shade_dense(
     sizes = sorted({n // d for d in tiers if n // d > 0})
     count = jnp.sum(active, dtype=jnp.int32)
 
+    def keep(a, v):
+        return jnp.where(active.reshape(active.shape + (1,) * (v.ndim - 1)), v.astype(a.dtype), a)
+
     def in_place(acc):
         pts = points_of(jnp.arange(n, dtype=jnp.int32))
         pts = dataclasses.replace(pts, valid=pts.valid & active)
-        vals = shade_fn(pts)
-        keep = active.reshape(active.shape + (1,) * (vals.ndim - 1))
-        return jnp.where(keep, vals.astype(acc.dtype), acc)
+        return jax.tree.map(keep, acc, shade_fn(pts))
 
     def compacted(size: int):
         def launch(acc):
@@ -291,8 +304,7 @@ def shade_dense(
             live = jnp.arange(size, dtype=jnp.int32) < count
             pts = points_of(items)
             pts = dataclasses.replace(pts, valid=pts.valid & live)
-            vals = shade_fn(pts).astype(acc.dtype)
-            return acc.at[jnp.where(live, items, n)].set(vals, mode="drop", unique_indices=True)
+            return _scatter(acc, jnp.where(live, items, n), shade_fn(pts), unique_indices=True)
         return launch
 
     # 0: nothing; 1 + i: the i-th size; 1 + len(sizes): in place.
