@@ -283,7 +283,10 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
         return jax.lax.fori_loop(0, cap, blend, image, unroll=True)
 
     with jax.named_scope("sorted_blend"):
-        image = jax.lax.fori_loop(0, passes, one_pass, background)
+        # The first pass runs unconditionally (over no layers it leaves the image bit for bit
+        # as it was): a loop over all the passes reads its condition on the host once more
+        # than it iterates, so a frame of one pass, the usual, costs one read, not two.
+        image = jax.lax.fori_loop(1, passes, one_pass, one_pass(0, background))
     return image, passes.astype(jnp.int32), overflow
 
 
