@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Prepared in the twenty-fifth session (carry [".whl", ".v"]; build .v first:
+# benchmarks/variants/prepare.sh), one call:
+#   bash benchmarks/gpu_twenty_fifth.sh gbuffer lanes      (about 6 minutes)
+# gbuffer: v24 (593a3ff, the G-buffer as rows of 20 channels) against this tree (one array a
+#   field; the sorted blend's first pass unconditional), 8-frame pans, images only: deferred,
+#   checkerboard and DACS on room and glass. bench_gbuffer_layout.py gave the fields 0.58x the
+#   rows' time on an H100 (0.42 against 0.72 ms); prediction: deferred 0.25-0.3 ms faster a
+#   frame on both scenes, checkerboard and DACS less (they pack only the points they shade),
+#   glass a further ~0.05 ms (one host read fewer).
+# lanes: whether the slopes that differ from deferred's follow the lanes launched, not the
+#   points shaded. Object space on foliage launches one 2^18-lane chunk a frame for the few
+#   hundred shadels a reusing frame shades (its chunk is sized for the store, 12.4M shadels):
+#   costs 0 and 256 at chunk 0 (auto), 65536 and 16384 (prediction: the slope per point falls
+#   towards deferred's as the idle lanes go, 2.0x -> about 1.2x). Deferred on foliage compacts
+#   its 757k points into half a screen (1.04M lanes): against tiers_fine (compacted sizes at
+#   every sixteenth of the screen from 2/16 to 8/16, 778k lanes), prediction: its slope falls
+#   towards the visibility buffer's (0.72x deferred's, which launches 786k).
+. "$(dirname "$0")/gpu_env.sh"
+S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+for part in "$@"; do
+  if [ "$part" = gbuffer ]; then
+    for t in v24 after; do
+      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 150 $S --scenes room glass \
+        --pipelines deferred checkerboard dacs --json "$OUT/gbuffer_$t.json" 2>&1 | quiet \
+        | sed "s/^/$t: /" | tee -a "$OUT/gbuffer.md"
+    done
+  elif [ "$part" = lanes ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines object_space object_space:chunk=65536 \
+      object_space:chunk=16384 --costs 0 256 --frames 8 --repeats 5 --out "$OUT/lanes.jsonl" \
+      2>&1 | quiet | grep -v '^{' | tee -a "$OUT/lanes.md"
+    for t in tiers_fine after; do
+      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 100 python3 benchmarks/bench_time_work.py \
+        --scenes foliage --pipelines deferred --costs 0 256 --frames 8 --repeats 5 \
+        --label "$t" --out "$OUT/lanes.jsonl" 2>&1 | quiet | grep -v '^{' \
+        | sed "s/^/$t: /" | tee -a "$OUT/lanes.md"
+    done
+  fi
+done
+exit 0
