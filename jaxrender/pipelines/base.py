@@ -32,7 +32,8 @@ class PipelineConfig(RenderConfig):
 
     chunk: lanes per shading dispatch chunk (the DispatchIndirect group size of the work list);
         0 (the default) sizes it to the work list (``dispatch.auto_chunk``: about sixteen
-        chunks for a full screen; DACS's levels: ``dispatch.MIN_CHUNK``), except deferred's
+        chunks for a full screen; DACS's levels: ``dispatch.MIN_CHUNK``; object space's store
+        and TADS's texels: half a screen and a screen, not their capacity), except deferred's
         screen passes, which then launch once (``dispatch.shade_screen``).
     cull_backfaces: drop back-facing triangles in the rasterizer.
     fragment_capacity: size of the fragment list per sample (0 = 4 x width x height); a frame

@@ -300,10 +300,15 @@ def shade_and_resolve(scene, sheet: ShadeSheet, camera, cfg: ObjectSpaceConfig,
     res = plan_store(scene, sheet, camera, cfg, state, fp_all, shade_frame)
     with jax.named_scope("shade"):
         active = (res.owned_slot & (res.live & ~res.reused)[:, None]).reshape(-1)
+        # The chunk is sized for half a screen of shadels, not for the store: the store holds
+        # many times what a frame shades (12.4M shadels on foliage at 1080p, for 750k in a
+        # shading frame and a few hundred in a reusing one), and a chunk sized to it launched
+        # 2^18 lanes a frame for those few (RESULTS.md, twenty-fifth session).
         colour, work = dispatch.shade(
             dispatch.WorkList.of(active),
             lambda it: shadel_points(scene, camera, sheet, res.al.slot_chunk, it, cfg.eps),
-            lambda pts: shade(pts, scene), res.colour, cfg.chunk)
+            lambda pts: shade(pts, scene), res.colour,
+            dispatch.resolve_chunk(cfg.chunk, n_pix // 2))
     with jax.named_scope("resolve"):
         out = resolve_taps(colour, sheet, res.al, vis, cfg)
     image, layered = blend_layers(scene, camera, blended, out.rows, out.image, cfg)
