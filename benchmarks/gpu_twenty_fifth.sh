@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-fifth session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call:
-#   bash benchmarks/gpu_twenty_fifth.sh gbuffer lanes      (about 6 minutes)
+#   bash benchmarks/gpu_twenty_fifth.sh gbuffer lanes      (about 6 minutes; ran 2026-12-06)
+#   bash benchmarks/gpu_twenty_fifth.sh profile            (about 3 minutes)
 # gbuffer: v24 (593a3ff, the G-buffer as rows of 20 channels) against this tree (one array a
 #   field; the sorted blend's first pass unconditional), 8-frame pans, images only: deferred,
 #   checkerboard and DACS on room and glass. bench_gbuffer_layout.py gave the fields 0.58x the
@@ -16,7 +17,17 @@
 #   its 757k points into half a screen (1.04M lanes): against tiers_fine (compacted sizes at
 #   every sixteenth of the screen from 2/16 to 8/16, 778k lanes), prediction: its slope falls
 #   towards the visibility buffer's (0.72x deferred's, which launches 786k).
+# profile: forward on room (3.63 ms, the one opaque row over 3 ms; its line's intercept is
+#   3.48 ms against deferred's 2.36) and deferred on glass (3.35 ms after the G-buffer change),
+#   kernels by scope, the largest 25.
 . "$(dirname "$0")/gpu_env.sh"
+prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
+  local pipe=$1 scene=$2 limit=$3
+  shift 3
+  PYTHONPATH=$PWD:/tmp/site timeout -k 5 "$limit" python3 benchmarks/profile_kernels.py "$pipe" \
+    --scene "$scene" --top 25 --calls 3 $(printf -- '--scope %s ' "$@") 2>&1 | quiet \
+    | tee -a "$OUT/profile.md"
+}
 S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in "$@"; do
   if [ "$part" = gbuffer ]; then
@@ -38,6 +49,10 @@ for part in "$@"; do
         --label "$t" --out "$OUT/lanes.jsonl" 2>&1 | quiet | grep -v '^{' \
         | sed "s/^/$t: /" | tee -a "$OUT/lanes.md"
     done
+  elif [ "$part" = profile ]; then
+    prof forward room 90 fragments alpha_test depth_test quads shade resolve
+    prof deferred glass 90 visibility gbuffer lighting transparent fragments front \
+      layer_shading composite sorted_blend
   fi
 done
 exit 0
