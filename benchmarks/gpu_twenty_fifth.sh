@@ -2,7 +2,7 @@
 # Prepared in the twenty-fifth session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call:
 #   bash benchmarks/gpu_twenty_fifth.sh gbuffer lanes      (about 6 minutes; ran 2026-12-06)
-#   bash benchmarks/gpu_twenty_fifth.sh profile            (about 3 minutes)
+#   bash benchmarks/gpu_twenty_fifth.sh profile os         (about 5 minutes)
 # gbuffer: v24 (593a3ff, the G-buffer as rows of 20 channels) against this tree (one array a
 #   field; the sorted blend's first pass unconditional), 8-frame pans, images only: deferred,
 #   checkerboard and DACS on room and glass. bench_gbuffer_layout.py gave the fields 0.58x the
@@ -20,6 +20,9 @@
 # profile: forward on room (3.63 ms, the one opaque row over 3 ms; its line's intercept is
 #   3.48 ms against deferred's 2.36) and deferred on glass (3.35 ms after the G-buffer change),
 #   kernels by scope, the largest 25.
+# os: object space's chunk sized for half a screen (this tree) against its store (v24) on
+#   foliage, thin and glass (prediction from lanes: 0.05-0.1 ms a frame faster at the default
+#   shader, where the idle lanes cost little).
 . "$(dirname "$0")/gpu_env.sh"
 prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
   local pipe=$1 scene=$2 limit=$3
@@ -48,6 +51,13 @@ for part in "$@"; do
         --scenes foliage --pipelines deferred --costs 0 256 --frames 8 --repeats 5 \
         --label "$t" --out "$OUT/lanes.jsonl" 2>&1 | quiet | grep -v '^{' \
         | sed "s/^/$t: /" | tee -a "$OUT/lanes.md"
+    done
+  elif [ "$part" = os ]; then
+    for t in v24 after; do
+      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 100 $S --scenes foliage thin glass \
+        --pipelines object_space --json "$OUT/os_$t.json" 2>&1 | quiet | grep '^|' \
+        | sed "s/^/$t: /" | tee -a "$OUT/os.md"
     done
   elif [ "$part" = profile ]; then
     prof forward room 90 fragments alpha_test depth_test quads shade resolve
