@@ -2,7 +2,8 @@
 # Prepared in the twenty-fifth session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call:
 #   bash benchmarks/gpu_twenty_fifth.sh gbuffer lanes      (about 6 minutes; ran 2026-12-06)
-#   bash benchmarks/gpu_twenty_fifth.sh profile os         (about 5 minutes)
+#   bash benchmarks/gpu_twenty_fifth.sh profile os         (about 3 minutes; ran 2026-12-06)
+#   bash benchmarks/gpu_twenty_fifth.sh final              (about 7 minutes)
 # gbuffer: v24 (593a3ff, the G-buffer as rows of 20 channels) against this tree (one array a
 #   field; the sorted blend's first pass unconditional), 8-frame pans, images only: deferred,
 #   checkerboard and DACS on room and glass. bench_gbuffer_layout.py gave the fields 0.58x the
@@ -23,6 +24,9 @@
 # os: object space's chunk sized for half a screen (this tree) against its store (v24) on
 #   foliage, thin and glass (prediction from lanes: 0.05-0.1 ms a frame faster at the default
 #   shader, where the idle lanes cost little).
+# final: this tree on every built-in scene, images only, for the pipelines this session
+#   changed (deferred, checkerboard and DACS: the G-buffer's fields; glass: every pipeline,
+#   the sorted blend's read), and deferred and object space on foliage at four shader costs.
 . "$(dirname "$0")/gpu_env.sh"
 prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
   local pipe=$1 scene=$2 limit=$3
@@ -59,6 +63,17 @@ for part in "$@"; do
         --pipelines object_space --json "$OUT/os_$t.json" 2>&1 | quiet | grep '^|' \
         | sed "s/^/$t: /" | tee -a "$OUT/os.md"
     done
+  elif [ "$part" = final ]; then
+    export PYTHONPATH=$PWD:/tmp/site
+    timeout -k 5 300 $S --scenes stripes spheres foliage thin terrain sliver room many_small \
+      foliage_wind spheres_spin grass glass --pipelines deferred checkerboard dacs \
+      --json "$OUT/final_scenes.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/final.md"
+    timeout -k 5 80 $S --scenes glass --pipelines visbuffer forward object_space \
+      --json "$OUT/final_glass.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/final.md"
+    timeout -k 5 140 python3 benchmarks/bench_time_work.py --scenes foliage \
+      --pipelines deferred object_space --costs 0 64 256 1024 --frames 8 --repeats 5 \
+      --budget 120 --out "$OUT/final_fits.jsonl" 2>&1 | quiet | grep -v '^{' \
+      | tee -a "$OUT/final.md"
   elif [ "$part" = profile ]; then
     prof forward room 90 fragments alpha_test depth_test quads shade resolve
     prof deferred glass 90 visibility gbuffer lighting transparent fragments front \
