@@ -3,7 +3,8 @@
 # benchmarks/variants/prepare.sh), one call:
 #   bash benchmarks/gpu_twenty_fifth.sh gbuffer lanes      (about 6 minutes; ran 2026-12-06)
 #   bash benchmarks/gpu_twenty_fifth.sh profile os         (about 3 minutes; ran 2026-12-06)
-#   bash benchmarks/gpu_twenty_fifth.sh final              (about 7 minutes)
+#   bash benchmarks/gpu_twenty_fifth.sh final              (about 6 minutes; ran 2026-12-06)
+#   bash benchmarks/gpu_twenty_fifth.sh crossover          (about 2 minutes)
 # gbuffer: v24 (593a3ff, the G-buffer as rows of 20 channels) against this tree (one array a
 #   field; the sorted blend's first pass unconditional), 8-frame pans, images only: deferred,
 #   checkerboard and DACS on room and glass. bench_gbuffer_layout.py gave the fields 0.58x the
@@ -27,6 +28,9 @@
 # final: this tree on every built-in scene, images only, for the pipelines this session
 #   changed (deferred, checkerboard and DACS: the G-buffer's fields; glass: every pipeline,
 #   the sorted blend's read), and deferred and object space on foliage at four shader costs.
+# crossover: deferred, checkerboard and DACS on foliage at costs 64 and 256 after the G-buffer
+#   change (the README's crossovers, 29 and 80 layers, are from before it; cost 0 lies below
+#   the lines, so these start at 64).
 . "$(dirname "$0")/gpu_env.sh"
 prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
   local pipe=$1 scene=$2 limit=$3
@@ -74,6 +78,11 @@ for part in "$@"; do
       --pipelines deferred object_space --costs 0 64 256 1024 --frames 8 --repeats 5 \
       --budget 120 --out "$OUT/final_fits.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/final.md"
+  elif [ "$part" = crossover ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines deferred checkerboard dacs --costs 64 256 --frames 8 \
+      --repeats 5 --budget 130 --out "$OUT/crossover.jsonl" 2>&1 | quiet | grep -v '^{' \
+      | tee -a "$OUT/crossover.md"
   elif [ "$part" = profile ]; then
     prof forward room 90 fragments alpha_test depth_test quads shade resolve
     prof deferred glass 90 visibility gbuffer lighting transparent fragments front \
