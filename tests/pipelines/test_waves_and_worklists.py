@@ -210,6 +210,31 @@ def test_a_screen_pass_is_one_dense_launch_unless_a_chunk_or_mode_is_named(
         assert int(done.lanes) >= int(active.sum()), (chunk, env)
 
 
+@pytest.mark.parametrize("chunk", [0, 64])
+@pytest.mark.parametrize("share", [0.1, 0.3, 0.9])
+def test_a_pass_writes_a_tuple_of_arrays_as_it_writes_one(rng, chunk, share):
+    """The G-buffer is one array a field: a pass whose shader returns a tuple writes each
+    array where it writes the one (compacted into a tier, in place, or chunked), with each
+    array's own width and dtype, and leaves the other entries as they were."""
+    n = 4096 + 300
+    active = rng.random(n) < share
+    out = (jnp.full((n, 3), -1.0, jnp.float32), jnp.full((n,), 7, jnp.int32))
+
+    def fields(points):
+        i = points.index
+        return jnp.stack([i, 2 * i, 3 * i], axis=1).astype(jnp.float32), i + 1
+
+    (wide, narrow), done = dispatch.shade_screen(jnp.asarray(active), index_points, fields, out,
+                                                 chunk)
+    i = np.arange(n)
+    np.testing.assert_array_equal(
+        np.asarray(wide), np.where(active[:, None], np.stack([i, 2 * i, 3 * i], 1), -1.0),
+        err_msg=f"the [N, 3] field, chunk {chunk}, {share:.0%} active")
+    np.testing.assert_array_equal(np.asarray(narrow), np.where(active, i + 1, 7),
+                                  err_msg=f"the int32 field, chunk {chunk}, {share:.0%} active")
+    assert narrow.dtype == jnp.int32 and int(done.invocations) == int(active.sum())
+
+
 @pytest.mark.parametrize("tiers", [(1,), (4, 0)])
 def test_the_dense_launch_refuses_a_tier_below_two(tiers):
     points_of = lambda items: None  # noqa: E731 - never reached
