@@ -4,7 +4,8 @@
 #   bash benchmarks/gpu_twenty_fifth.sh gbuffer lanes      (about 6 minutes; ran 2026-12-06)
 #   bash benchmarks/gpu_twenty_fifth.sh profile os         (about 3 minutes; ran 2026-12-06)
 #   bash benchmarks/gpu_twenty_fifth.sh final              (about 6 minutes; ran 2026-12-06)
-#   bash benchmarks/gpu_twenty_fifth.sh crossover          (about 2 minutes)
+#   bash benchmarks/gpu_twenty_fifth.sh crossover          (about 2 minutes; ran 2026-12-06)
+#   bash benchmarks/gpu_twenty_fifth.sh dacs               (about 3 minutes)
 # gbuffer: v24 (593a3ff, the G-buffer as rows of 20 channels) against this tree (one array a
 #   field; the sorted blend's first pass unconditional), 8-frame pans, images only: deferred,
 #   checkerboard and DACS on room and glass. bench_gbuffer_layout.py gave the fields 0.58x the
@@ -83,6 +84,10 @@ for part in "$@"; do
       --scenes foliage --pipelines deferred checkerboard dacs --costs 64 256 --frames 8 \
       --repeats 5 --budget 130 --out "$OUT/crossover.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/crossover.md"
+  elif [ "$part" = dacs ]; then  # crossover's DACS rows (cut by its budget), deferred's again
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 190 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines dacs deferred --costs 64 256 --frames 8 --repeats 5 \
+      --budget 175 --out "$OUT/dacs.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/dacs.md"
   elif [ "$part" = profile ]; then
     prof forward room 90 fragments alpha_test depth_test quads shade resolve
     prof deferred glass 90 visibility gbuffer lighting transparent fragments front \
