@@ -85,3 +85,25 @@ def test_the_composite_of_the_filled_prefix_is_that_of_the_whole_list(settings):
             np.testing.assert_array_equal(np.asarray(got_counts[k]), np.asarray(v),
                                           err_msg=f"{k}, count {count}, {settings}")
         assert int(want_counts["transparent_fragments"]) == int(np.asarray(front).sum())
+
+
+@pytest.mark.parametrize("settings", [BlendSettings(), BlendSettings(order="submission")],
+                         ids=["sorted", "submission"])
+def test_no_layer_in_front_leaves_the_background_bit_for_bit(settings):
+    """The sorted blend's first pass runs unconditionally (one host read fewer a frame): over
+    a list with no fragment in front of the opaque depth it must blend nothing, and count no
+    pass."""
+    scene = layered_quads(THREE)
+    blend = jax.jit(lambda layers, bg: composite(scene, layers, bg, settings))
+    for count in (0, 300):
+        rng = np.random.default_rng(count + 11)
+        fr = _fragments(count, rng)
+        tri = jnp.asarray(np.where(np.arange(N) < count, 2, 0), jnp.int32)
+        layers = Layers(fr.pixel, tri, fr.depth, jnp.zeros((N,), bool),
+                        jnp.asarray(rng.random((N, 5)), jnp.float32), jnp.int32(count))
+        background = jnp.asarray(rng.random((N_PIX, 3)), jnp.float32)
+        image, counts = blend(layers, background)
+        np.testing.assert_array_equal(np.asarray(image), np.asarray(background),
+                                      err_msg=f"{count} fragments, none in front, {settings}")
+        assert int(counts["transparent_passes"]) == 0, (count, settings)
+        assert int(counts["transparent_fragments"]) == 0, (count, settings)
