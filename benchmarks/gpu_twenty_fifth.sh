@@ -5,7 +5,8 @@
 #   bash benchmarks/gpu_twenty_fifth.sh profile os         (about 3 minutes; ran 2026-12-06)
 #   bash benchmarks/gpu_twenty_fifth.sh final              (about 6 minutes; ran 2026-12-06)
 #   bash benchmarks/gpu_twenty_fifth.sh crossover          (about 2 minutes; ran 2026-12-06)
-#   bash benchmarks/gpu_twenty_fifth.sh dacs               (about 3 minutes)
+#   bash benchmarks/gpu_twenty_fifth.sh dacs               (about 3 minutes; ran 2026-12-06)
+#   bash benchmarks/gpu_twenty_fifth.sh checker            (about 3 minutes; not yet run)
 # gbuffer: v24 (593a3ff, the G-buffer as rows of 20 channels) against this tree (one array a
 #   field; the sorted blend's first pass unconditional), 8-frame pans, images only: deferred,
 #   checkerboard and DACS on room and glass. bench_gbuffer_layout.py gave the fields 0.58x the
@@ -32,6 +33,12 @@
 # crossover: deferred, checkerboard and DACS on foliage at costs 64 and 256 after the G-buffer
 #   change (the README's crossovers, 29 and 80 layers, are from before it; cost 0 lies below
 #   the lines, so these start at 64).
+# checker: checkerboard is now slower than deferred on every opaque scene but room at the
+#   default shaders (0.97-2.01 ms against 0.79-1.90). Its half-screen list launched in one
+#   dense pass (.v/dense_checker, one host read) against today's chunked dispatch (5 reads on
+#   foliage): in the eighteenth session no clear gain; the G-buffer change shortened both
+#   passes, so the reads weigh more now. Prediction: dense 0.1-0.2 ms faster on foliage and
+#   room, equal on glass.
 . "$(dirname "$0")/gpu_env.sh"
 prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
   local pipe=$1 scene=$2 limit=$3
@@ -88,6 +95,13 @@ for part in "$@"; do
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 190 python3 benchmarks/bench_time_work.py \
       --scenes foliage --pipelines dacs deferred --costs 64 256 --frames 8 --repeats 5 \
       --budget 175 --out "$OUT/dacs.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/dacs.md"
+  elif [ "$part" = checker ]; then
+    for t in dense_checker after; do
+      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 80 $S --scenes foliage room glass \
+        --pipelines checkerboard --json "$OUT/checker_$t.json" 2>&1 | quiet | grep '^|' \
+        | sed "s/^/$t: /" | tee -a "$OUT/checker.md"
+    done
   elif [ "$part" = profile ]; then
     prof forward room 90 fragments alpha_test depth_test quads shade resolve
     prof deferred glass 90 visibility gbuffer lighting transparent fragments front \
