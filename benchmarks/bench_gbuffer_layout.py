@@ -8,7 +8,7 @@ fields stored (``fusion.materialize_all``) before the rows are packed.
 
 On an H100 the concatenation was one kernel of 0.55 ms on room and on glass (RESULTS.md,
 twenty-fourth session), several times what writing 20 channels of 1080p costs; one array a
-field took 0.58x the rows' time (twenty-fifth session). Each variant's median ms of 20 calls,
+field took 0.58-0.62x the rows' time (twenty-fifth session). Each variant's median ms of 20 calls,
 alternated over 3 rounds.
 """
 
