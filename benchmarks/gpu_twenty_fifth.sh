@@ -40,6 +40,15 @@
 #   passes, so the reads weigh more now. Prediction: dense 0.1-0.2 ms faster on foliage and
 #   room, equal on glass.
 . "$(dirname "$0")/gpu_env.sh"
+side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
+  local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
+  shift 3
+  for t in $names; do
+    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $S "$@" --json "$OUT/${name}_$t.json" 2>&1 \
+      | quiet | grep '^|' | sed "s/^/$t: /" | tee -a "$OUT/$name.md"
+  done
+}
 prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
   local pipe=$1 scene=$2 limit=$3
   shift 3
@@ -50,12 +59,8 @@ prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCEN
 S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in "$@"; do
   if [ "$part" = gbuffer ]; then
-    for t in v24 after; do
-      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      PYTHONPATH=$R:/tmp/site timeout -k 5 150 $S --scenes room glass \
-        --pipelines deferred checkerboard dacs --json "$OUT/gbuffer_$t.json" 2>&1 | quiet \
-        | sed "s/^/$t: /" | tee -a "$OUT/gbuffer.md"
-    done
+    side_by_side gbuffer 150 "v24 after" --scenes room glass \
+      --pipelines deferred checkerboard dacs
   elif [ "$part" = lanes ]; then
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
       --scenes foliage --pipelines object_space object_space:chunk=65536 \
@@ -69,12 +74,7 @@ for part in "$@"; do
         | sed "s/^/$t: /" | tee -a "$OUT/lanes.md"
     done
   elif [ "$part" = os ]; then
-    for t in v24 after; do
-      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      PYTHONPATH=$R:/tmp/site timeout -k 5 100 $S --scenes foliage thin glass \
-        --pipelines object_space --json "$OUT/os_$t.json" 2>&1 | quiet | grep '^|' \
-        | sed "s/^/$t: /" | tee -a "$OUT/os.md"
-    done
+    side_by_side os 100 "v24 after" --scenes foliage thin glass --pipelines object_space
   elif [ "$part" = final ]; then
     export PYTHONPATH=$PWD:/tmp/site
     timeout -k 5 300 $S --scenes stripes spheres foliage thin terrain sliver room many_small \
@@ -96,12 +96,8 @@ for part in "$@"; do
       --scenes foliage --pipelines dacs deferred --costs 64 256 --frames 8 --repeats 5 \
       --budget 175 --out "$OUT/dacs.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/dacs.md"
   elif [ "$part" = checker ]; then
-    for t in dense_checker after; do
-      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      PYTHONPATH=$R:/tmp/site timeout -k 5 80 $S --scenes foliage room glass \
-        --pipelines checkerboard --json "$OUT/checker_$t.json" 2>&1 | quiet | grep '^|' \
-        | sed "s/^/$t: /" | tee -a "$OUT/checker.md"
-    done
+    side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
+      --pipelines checkerboard
   elif [ "$part" = profile ]; then
     prof forward room 90 fragments alpha_test depth_test quads shade resolve
     prof deferred glass 90 visibility gbuffer lighting transparent fragments front \
