@@ -119,8 +119,8 @@ def frame(scene, camera, cfg: DeferredConfig) -> Frame:
         lit, lighting = dispatch.shade_screen(
             plan.active.reshape(-1),
             lambda it: unpack_gbuffer(gbuffer_entries(gbuf, it), camera, jnp.ones(it.shape, bool)),
-            lambda pts: shade(pts, scene), jnp.zeros((n_s * cfg.width * cfg.height, 3),
-                                                     jnp.float32), cfg.chunk)
+            lambda pts: shade(pts, scene), jnp.zeros((plan.active.size, 3), jnp.float32),
+            cfg.chunk)
     with jax.named_scope("resolve"):
         image = resolve_samples(lit, plan, cfg)
     image, blended = transparent_pass(scene, camera, image, vis.depth, cfg)
