@@ -30,6 +30,7 @@ compiles none of this.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import jax
@@ -165,6 +166,10 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
         clip = clip_vertices(scene, camera, cfg)
         with jax.named_scope("fragments"):
             fr = transparent_fragments(scene, clip, cfg)
+        if int(cfg.chunk) == 0 and not dispatch.named_launch_mode():
+            out, counts = blend_on_prefix(scene, camera, clip, fr, image.reshape(-1, 3),
+                                          opaque_depth.reshape(-1), cfg)
+            return out.reshape(h, w, 3), counts
         with jax.named_scope("front"):
             front, work = front_work(fr, opaque_depth.reshape(-1), w * h)
 
@@ -176,8 +181,37 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
         with jax.named_scope("composite"):
             out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts["transparent_invocations"] = work.invocations
+    counts["transparent_lanes"] = work.lanes
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return out.reshape(h, w, 3), counts
+
+
+def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Array, cfg):
+    """``transparent_pass``'s depth test, shading and composite in one launch over the fragment
+    list's filled prefix (``on_prefix``: one host read): every entry of the prefix runs the
+    layer shader, those not in front as idle lanes, where the chunked dispatch would read the
+    host once a launch and scatter into a list-sized array. The prefix sizes step by at most
+    1.5x, so at most a third of the lanes idle past the live fragments. Returns (image
+    float32[P, 3], counts, with the lanes launched in ``transparent_lanes``)."""
+    n_pix, shader, settings = background.shape[0], layer_shader(scene, camera), settings_of(cfg)
+
+    def on_filled(part, bg):
+        valid, pixel, tri, depth = part
+        front = in_front(valid, pixel, depth, opaque_depth, n_pix)
+        with jax.named_scope("layer_shading"):
+            points = points_at(scene, camera, clip, cfg, tri, pixel)
+            values = shader(dataclasses.replace(points, valid=points.valid & front))
+        with jax.named_scope("composite"):
+            image, counts = composite_list(scene, Layers(pixel, tri, depth, front, values), bg,
+                                           settings)
+        counts["transparent_lanes"] = jnp.int32(pixel.shape[0])
+        return (), (image, counts)
+
+    _, (image, counts) = on_prefix(on_filled, live_fragments(fr),
+                                   (fr.valid, fr.pixel, fr.tri, fr.depth), background)
+    counts["transparent_invocations"] = counts["transparent_fragments"]
+    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
+    return image, counts
 
 
 def merge_counts(counts: dict, transparent: dict) -> dict:
@@ -316,7 +350,7 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
     return mean * (1.0 - reveal)[:, None] + reveal[:, None] * background + glow
 
 
-__all__ = ["BlendSettings", "check_settings", "composite", "composite_list", "forward_blend",
+__all__ = ["blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list", "forward_blend",
            "forward_front", "forward_split", "front_work", "in_front", "LAYER_BYTES",
            "layer_shader", "Layers", "live_fragments", "merge_counts",
            "refuse_transparency", "settings_of", "shade_layers",

@@ -12,10 +12,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.pipelines.transparency import (BlendSettings, Layers, composite, composite_list,
                                               front_work)
 from jaxrender.raster.fragments import Fragments
 from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
+from jaxrender.sorting import prefix_sizes
 from tests.pipelines.transparent_scenes import layered_quads, THREE
 
 N_PIX = 64
@@ -107,3 +109,28 @@ def test_no_layer_in_front_leaves_the_background_bit_for_bit(settings):
                                       err_msg=f"{count} fragments, none in front, {settings}")
         assert int(counts["transparent_passes"]) == 0, (count, settings)
         assert int(counts["transparent_fragments"]) == 0, (count, settings)
+
+
+@pytest.mark.parametrize("pipeline", ["deferred", "checkerboard"])
+def test_the_one_launch_pass_blends_and_counts_as_the_chunked_dispatch(pipeline):
+    """With the auto chunk the transparent pass tests, shades and blends the list's filled prefix
+    in one launch (``blend_on_prefix``); with a chunk given it dispatches its work list in
+    chunks. Same image to float32 rounding, same counts; the one launch's lanes are a prefix
+    length that holds the live fragments, the chunks' whole chunks over those in front."""
+    scene = layered_quads(THREE)
+    w, h = 32, 18
+    frames = {chunk: get_pipeline(pipeline).render(
+        scene, scene.camera, make_config(pipeline, width=w, height=h, chunk=chunk))
+        for chunk in (0, 64)}
+    one, chunked = frames[0], frames[64]
+    np.testing.assert_allclose(np.asarray(one.image), np.asarray(chunked.image), atol=1e-6,
+                               rtol=0, err_msg=f"{pipeline}: one launch against chunks of 64")
+    for key in ("transparent_invocations", "transparent_fragments", "transparent_layers_max",
+                "transparent_passes", "shade_invocations"):
+        assert int(one.counts[key]) == int(chunked.counts[key]), (pipeline, key)
+    shaded = int(one.counts["transparent_invocations"])
+    assert shaded > 0, pipeline
+    assert int(chunked.counts["transparent_lanes"]) == -(-shaded // 64) * 64, pipeline
+    capacity = make_config(pipeline, width=w, height=h).capacity
+    assert int(one.counts["transparent_lanes"]) in prefix_sizes(capacity), pipeline
+    assert int(one.counts["transparent_lanes"]) >= shaded, pipeline
