@@ -3,7 +3,7 @@
 # .v/v0 (the code before the thirteenth session, 9a6cd99), .v/v13 (before the fourteenth,
 # c298392), .v/v14 (before the fifteenth, 07b2d0c), .v/v15 (before the sixteenth,
 # 39e025f), .v/v16 (before the seventeenth, fd3a891), .v/v19 (before the twentieth,
-# 424a5fe), .v/v20 (c87d91d), .v/v24 (before the twenty-fifth, 593a3ff) and one .v/<name>
+# 424a5fe), .v/v20 (c87d91d), .v/v24 (before the twenty-fifth, 593a3ff), .v/v25 (before the twenty-sixth, 3be237f) and one .v/<name>
 # per patch here (HEAD's jaxrender/ with the patch applied). Run from anywhere; .v/ is rebuilt from scratch.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -23,6 +23,8 @@ mkdir -p .v/v20
 git archive c87d91d jaxrender | tar -x -C .v/v20
 mkdir -p .v/v24
 git archive 593a3ff jaxrender | tar -x -C .v/v24
+mkdir -p .v/v25
+git archive 3be237f jaxrender | tar -x -C .v/v25
 for p in benchmarks/variants/*.patch; do
   name=$(basename "$p" .patch)
   mkdir -p ".v/$name"

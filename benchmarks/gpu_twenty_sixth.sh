@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Prepared in the twenty-sixth session (carry [".whl", ".v"]; build .v first:
+# benchmarks/variants/prepare.sh), one call:
+#   bash benchmarks/gpu_twenty_sixth.sh glass profile checker      (about 7 minutes)
+# glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
+#   launch, the layer shading in chunks of the compacted list into an array the size of the
+#   whole fragment list, the composite in a second prefix launch) against this tree (the three
+#   in one launch over the list's filled prefix, idle lanes for the fragments behind the opaque
+#   depth), every pipeline that runs the pass, on glass. Counted on the CPU: 5 host reads a
+#   frame fewer. Prediction: 0.25-0.4 ms a frame faster (the 8.3M-entry values array's
+#   broadcast and scatters, 0.19 ms, and the reads), the layer shader itself about 15% longer
+#   (1.55M lanes against 1.31M).
+# profile: deferred on glass, this tree, kernels by scope.
+# checker: prepared last session: checkerboard's half-screen list launched in one dense pass
+#   (.v/dense_checker, one host read) against this tree's chunked dispatch (5 reads on
+#   foliage). Prediction: dense 0.1-0.2 ms faster on foliage and room, equal on glass.
+. "$(dirname "$0")/gpu_env.sh"
+side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
+  local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
+  shift 3
+  for t in $names; do
+    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $S "$@" --json "$OUT/${name}_$t.json" 2>&1 \
+      | quiet | grep '^|' | sed "s/^/$t: /" | tee -a "$OUT/$name.md"
+  done
+}
+prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
+  local pipe=$1 scene=$2 limit=$3
+  shift 3
+  PYTHONPATH=$PWD:/tmp/site timeout -k 5 "$limit" python3 benchmarks/profile_kernels.py "$pipe" \
+    --scene "$scene" --top 25 --calls 3 $(printf -- '--scope %s ' "$@") 2>&1 | quiet \
+    | tee -a "$OUT/profile.md"
+}
+S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+for part in "$@"; do
+  if [ "$part" = glass ]; then
+    side_by_side glass 150 "v25 after" --scenes glass \
+      --pipelines deferred checkerboard dacs visbuffer
+  elif [ "$part" = profile ]; then
+    prof deferred glass 90 visibility gbuffer lighting transparent fragments layer_shading \
+      composite sorted_blend
+  elif [ "$part" = checker ]; then
+    side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
+      --pipelines checkerboard
+  fi
+done
+exit 0
