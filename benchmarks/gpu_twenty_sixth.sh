@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-sixth session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call:
-#   bash benchmarks/gpu_twenty_sixth.sh glass profile checker      (about 7 minutes)
+#   bash benchmarks/gpu_twenty_sixth.sh glass profile checker      (about 3 minutes; ran)
+#   bash benchmarks/gpu_twenty_sixth.sh visbuffer vbfits profile2  (about 7 minutes)
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
@@ -14,6 +15,17 @@
 # checker: prepared last session: checkerboard's half-screen list launched in one dense pass
 #   (.v/dense_checker, one host read) against this tree's chunked dispatch (5 reads on
 #   foliage). Prediction: dense 0.1-0.2 ms faster on foliage and room, equal on glass.
+# visbuffer: the visibility buffer's wave-ordered work list shaded in one tiered launch
+#   (dispatch.run_tiered over SCREEN_TIERS, one host read) against the chunked dispatch it
+#   had (this tree under JAXRENDER_DISPATCH=blocks: on an opaque scene, the old program; 8
+#   reads a frame on glass), on five opaque scenes; glass with this tree alone. Prediction:
+#   as deferred's passes did in the nineteenth session, 5-12% faster on room and foliage, about
+#   equal on terrain (62% covered: the half-screen tier misses, every lane runs).
+# vbfits: the visibility buffer and deferred on foliage at shader costs 0 and 256. The
+#   visibility buffer's slope was 0.72x deferred's with exact chunks (786k lanes); now it
+#   launches deferred's tier (1.04M lanes for 757k points). Prediction: the ratio moves
+#   towards 1 if a slope follows lanes; it stays if it follows points (as tiers_fine said).
+# profile2: DACS and object space on glass (3.73 and 4.88 ms), kernels by scope.
 . "$(dirname "$0")/gpu_env.sh"
 side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
   local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
@@ -39,6 +51,20 @@ for part in "$@"; do
   elif [ "$part" = profile ]; then
     prof deferred glass 90 visibility gbuffer lighting transparent fragments layer_shading \
       composite sorted_blend
+  elif [ "$part" = visbuffer ]; then
+    side_by_side visbuffer 150 after --scenes foliage room terrain thin stripes glass \
+      --pipelines visbuffer
+    JAXRENDER_DISPATCH=blocks side_by_side visbuffer_blocks 150 after --scenes foliage room \
+      terrain thin stripes --pipelines visbuffer
+  elif [ "$part" = vbfits ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines visbuffer deferred --costs 0 256 --frames 8 --repeats 5 \
+      --budget 130 --out "$OUT/vbfits.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/vbfits.md"
+  elif [ "$part" = profile2 ]; then
+    prof dacs glass 80 visibility dacs decide interpolate shade transparent layer_shading \
+      composite
+    prof object_space glass 80 visibility mark_allocate shade resolve counts reuse \
+      transparent_marking transparent_resolve
   elif [ "$part" = checker ]; then
     side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
       --pipelines checkerboard
