@@ -337,39 +337,3 @@ def shade_screen(
     if int(chunk) == 0 and not named_launch_mode():
         return shade_dense(active, points_of, shade_fn, out, SCREEN_TIERS)
     return shade(WorkList.of(active), points_of, shade_fn, out, chunk)
-
-
-def run_tiered(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
-               tiers: tuple[int, ...] = SCREEN_TIERS) -> tuple[Array, WorkList]:
-    """``run`` in one launch (one host read): the first N // d entries of the compacted list,
-    for the largest d in ``tiers`` whose launch holds its count, else all N; the lanes past the
-    count idle. For lists kept in an order of their own (the visibility buffer's waves), which
-    ``shade_dense``, compacting a mask in index order, would lose. Each size is one more copy of
-    ``fn`` compiled. Counts: one launch (none for an empty list), its lanes in ``lanes``."""
-    items, count = work.items, work.count
-    n = items.shape[0]
-    sizes = sorted({n // d for d in tiers if n // d > 0} | {n})
-    sentinel = _rows(out)
-
-    def launch(size: int):
-        def branch(acc):
-            lane_items = items[:size]
-            live = jnp.arange(size, dtype=jnp.int32) < count
-            return _scatter(acc, jnp.where(live, lane_items, sentinel), fn(lane_items, live))
-        return branch
-
-    # 0: nothing; 1 + i: the i-th size.
-    which = jnp.where(count == 0, 0, 1 + sum((count > m).astype(jnp.int32) for m in sizes[:-1]))
-    out = jax.lax.switch(which, [lambda acc: acc] + [launch(m) for m in sizes], out)
-    lanes = jnp.asarray([0] + sizes, jnp.int32)[which]
-    return out, WorkList(items, count, count, n, (count > 0).astype(jnp.int32), lanes)
-
-
-def run_screen(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
-               chunk: int = DEFAULT_CHUNK) -> tuple[Array, WorkList]:
-    """``run`` of a screen-sized work list kept in its own order: with the auto chunk and no
-    ``JAXRENDER_DISPATCH`` set, one ``run_tiered`` launch over ``SCREEN_TIERS``; with a chunk
-    given, or a launch mode named, the chunked ``run`` in that mode (as ``shade_screen``)."""
-    if int(chunk) == 0 and not named_launch_mode():
-        return run_tiered(work, fn, out, SCREEN_TIERS)
-    return run(work, fn, out, chunk)

@@ -272,8 +272,7 @@ def frame(scene, camera, t, prev_camera, cfg: VisBufferConfig) -> Frame:
             pts = points_at(scene, camera, clip, cfg, jnp.where(live_lanes, t, -1), items)
             return shade(pts, scene)
 
-        out, work = dispatch.run_screen(plan.work, fn, jnp.zeros((w * h, 3), jnp.float32),
-                                        cfg.chunk)
+        out, work = dispatch.run(plan.work, fn, jnp.zeros((w * h, 3), jnp.float32), cfg.chunk)
     covered = tri >= 0
     with jax.named_scope("broadcast"):
         image = jnp.where(covered.reshape(-1)[:, None], out[plan.anchor], 0.0).reshape(h, w, 3)

@@ -87,17 +87,3 @@ def test_vrs_2x2_shades_a_quarter_and_broadcasts():
     # Full rate: 4 x 3 tiles of 8x8, two waves each.
     assert int(full.counts["waves"]) == 24
     np.testing.assert_allclose(float(full.counts["lane_utilization"]), 1.0)
-
-
-@pytest.mark.parametrize("vrs", ["off", "fixed"])
-def test_the_one_launch_shading_equals_the_chunked_dispatch(vrs):
-    """With the auto chunk the wave-ordered work list is shaded in one tiered launch
-    (``dispatch.run_screen``); with a chunk given, in chunks. Same image, same counts."""
-    scene = make_scene([rect_part(0, 0, 10, 7, 2.0, tilt=0.3), rect_part(3, 2, W, H, 4.0)])
-    params = {"vrs": vrs, "vrs_rate": "2x2"} if vrs == "fixed" else {}
-    one, chunked = render(scene, **params), render(scene, chunk=64, **params)
-    np.testing.assert_allclose(np.asarray(one.image), np.asarray(chunked.image), atol=1e-6,
-                               rtol=0, err_msg=f"vrs {vrs}: one launch against chunks of 64")
-    for key in ("shade_invocations", "waves", "unfilled_lanes", "vertex_invocations"):
-        assert int(one.counts[key]) == int(chunked.counts[key]), f"vrs {vrs}: {key}"
-    assert int(one.counts["shade_invocations"]) > 0

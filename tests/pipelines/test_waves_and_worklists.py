@@ -235,27 +235,6 @@ def test_a_pass_writes_a_tuple_of_arrays_as_it_writes_one(rng, chunk, share):
     assert narrow.dtype == jnp.int32 and int(done.invocations) == int(active.sum())
 
 
-@pytest.mark.parametrize("count", [0, 1, 100, 101, 150, 200, 201, 399, 400])
-def test_the_tiered_launch_keeps_the_lists_order_and_launches_one_tier(rng, count):
-    """``run_tiered`` launches the first N // d entries of a list in an order of its own (here
-    shuffled, as the visibility buffer's waves are) for the largest d that holds the count, or
-    all N: each item written once, where the chunked ``run`` writes it; one launch, its lanes
-    the tier's (hand-worked for N = 400, tiers 4 and 2: 100, 200, else 400)."""
-    n = 400
-    items = np.zeros(n, np.int32)
-    items[:count] = rng.permutation(n)[:count]
-    work = dispatch.WorkList(jnp.asarray(items), jnp.int32(count))
-    fn = lambda items, live: items.astype(jnp.float32) * 3.0 + 1.0  # noqa: E731
-    start = jnp.full((n,), -1.0, jnp.float32)
-    got, done = dispatch.run_tiered(work, fn, start, (4, 2))
-    want, chunked = dispatch.run(work, fn, start, 64)
-    np.testing.assert_array_equal(np.asarray(got), np.asarray(want), err_msg=f"count {count}")
-    lanes = 0 if count == 0 else 100 if count <= 100 else 200 if count <= 200 else 400
-    assert (int(done.invocations), int(done.chunks), int(done.lanes)) == (
-        count, int(count > 0), lanes), count
-    assert int(chunked.invocations) == count
-
-
 @pytest.mark.parametrize("tiers", [(1,), (4, 0)])
 def test_the_dense_launch_refuses_a_tier_below_two(tiers):
     points_of = lambda items: None  # noqa: E731 - never reached
