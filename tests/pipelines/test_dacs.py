@@ -160,15 +160,21 @@ def test_borders_and_odd_sizes_are_finite(w, h, spacing):
     assert img.min() >= image.min() and img.max() <= image.max()
 
 
-def test_each_level_is_one_launch_of_a_power_of_two_number_of_chunks():
-    # Levels need different numbers of 64-lane chunks here; each launches the fewest power of
-    # two of them that holds its list (dispatch's "switch"), read off its own decisions.
+def test_each_step_is_one_launch_of_a_power_of_two_number_of_chunks():
+    # Steps need different numbers of 64-lane chunks here; each launches the fewest power of
+    # two of them that holds its list (dispatch's "switch"), read off its own decisions. The
+    # levels have 384, 384, 768, 1536 and 3072 pixels: the last runs as two steps of 1536,
+    # its pixels in raster order (LARGEST_LEVEL_STEPS = 2).
+    assert dacs_mod.LARGEST_LEVEL_STEPS == 2
     rng = np.random.default_rng(7)
     image = rng.uniform(0.0, 1.0, (64, 96, 3)).astype(np.float32)
     image[:, :40] = 0.5  # flat on the left: fewer of its pixels need shading
     _, shaded, counts = _lookup(image, 0.002)
     levels = level_map(64, 96, 4)
-    need = [int(np.sum(shaded & (levels == k))) for k in range(n_levels(4))]
+    need = [int(np.sum(shaded & (levels == k))) for k in range(n_levels(4) - 1)]
+    last = shaded[levels == n_levels(4) - 1]  # raster order
+    assert last.size == 3072
+    need += [int(last[:1536].sum()), int(last[1536:].sum())]
     chunks = [-(-n // 64) for n in need]
     launched = [0 if c == 0 else 1 << (c - 1).bit_length() for c in chunks]
     assert len(set(chunks)) > 2 and launched != chunks, f"the case rounds up: {chunks}"
@@ -176,6 +182,32 @@ def test_each_level_is_one_launch_of_a_power_of_two_number_of_chunks():
     assert int(counts["dispatch_chunks"]) == sum(launched), (need, chunks, launched)
     assert int(counts["dispatch_lanes"]) == 64 * sum(launched)
     assert int(counts["dispatch_lanes"]) < 2 * 64 * sum(chunks)
+
+
+@pytest.mark.parametrize("spacing", [4, 8])
+def test_the_levels_cut_into_steps_decide_and_reconstruct_as_whole_levels(monkeypatch, spacing):
+    """A level's pixels are independent (their parents lie on earlier levels), so cutting the
+    levels into more loop steps changes nothing but the launches: the same image bit for bit,
+    the same pixels shaded, the same warp counts, on a random image with object ids."""
+    rng = np.random.default_rng(spacing)
+    h, w = 37, 53
+    image = rng.uniform(0.0, 1.0, (h, w, 3)).astype(np.float32)
+    ids = (rng.random((h, w)) < 0.05).astype(np.int32)
+    runs = {}
+    for steps in (1, 2, 5):
+        monkeypatch.setattr(dacs_mod, "LARGEST_LEVEL_STEPS", steps)
+        img, shaded, _, counts = dacs_mod.dacs_reconstruct(
+            lambda items, live: jnp.asarray(image).reshape(-1, 3)[items], jnp.asarray(ids),
+            jnp.ones((h, w), bool), jnp.float32(0.01), chunk=64, spacing=spacing)
+        runs[steps] = (np.asarray(img), np.asarray(shaded), counts)
+    img1, shaded1, counts1 = runs[1]
+    assert 0 < shaded1.sum() < h * w, "the case shades some pixels and interpolates others"
+    for steps in (2, 5):
+        img, shaded, counts = runs[steps]
+        np.testing.assert_array_equal(img, img1, err_msg=f"{steps} steps of the largest level")
+        np.testing.assert_array_equal(shaded, shaded1, err_msg=f"{steps} steps: shaded")
+        for key in ("shade_invocations", "warp_search_steps", "warp_shade_steps"):
+            assert int(counts[key]) == int(counts1[key]), (steps, key)
 
 
 def test_warp_simulation_counts():
