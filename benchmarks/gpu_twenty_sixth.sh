@@ -2,7 +2,8 @@
 # Prepared in the twenty-sixth session (carry [".whl", ".v"]; build .v first:
 # benchmarks/variants/prepare.sh), one call:
 #   bash benchmarks/gpu_twenty_sixth.sh glass profile checker      (about 3 minutes; ran)
-#   bash benchmarks/gpu_twenty_sixth.sh visbuffer vbfits profile2  (about 7 minutes)
+#   bash benchmarks/gpu_twenty_sixth.sh visbuffer vbfits profile2  (about 3 minutes; ran)
+#   bash benchmarks/gpu_twenty_sixth.sh dacs barrier                (about 7 minutes)
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
@@ -26,6 +27,15 @@
 #   launches deferred's tier (1.04M lanes for 757k points). Prediction: the ratio moves
 #   towards 1 if a slope follows lanes; it stays if it follows points (as tiers_fine said).
 # profile2: DACS and object space on glass (3.73 and 4.88 ms), kernels by scope.
+# dacs: DACS's levels' loop in steps sized to a piece of the largest level, not to the whole of
+#   it: .v/dacs_steps1 (one step a level, each padded to the largest: 5.2M entries decided a
+#   frame at 1080p), this tree (2 pieces: six steps, 3.1M) and .v/dacs_steps4 (nine steps,
+#   2.3M). profile2 gave decide 0.41 and interpolate 0.25 ms on glass. Prediction: this tree
+#   0.2 ms a frame faster than steps1 on every scene; steps4 between (fewer entries, four more
+#   steps of launches).
+# barrier: the layer values materialized before the composite (.v/layer_barrier) against this
+#   tree, where XLA fuses the tail of the layer shader into the sort's payload gather (0.14
+#   ms). Prediction: 0.05-0.1 ms faster on glass.
 . "$(dirname "$0")/gpu_env.sh"
 side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
   local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
@@ -65,6 +75,12 @@ for part in "$@"; do
       composite
     prof object_space glass 80 visibility mark_allocate shade resolve counts reuse \
       transparent_marking transparent_resolve
+  elif [ "$part" = dacs ]; then
+    side_by_side dacs 200 "dacs_steps1 after dacs_steps4" --scenes foliage room glass \
+      --pipelines dacs
+  elif [ "$part" = barrier ]; then
+    side_by_side barrier 120 "layer_barrier after" --scenes glass --pipelines deferred \
+      checkerboard
   elif [ "$part" = checker ]; then
     side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
       --pipelines checkerboard
