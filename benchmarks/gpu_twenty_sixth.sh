@@ -3,7 +3,8 @@
 # benchmarks/variants/prepare.sh), one call:
 #   bash benchmarks/gpu_twenty_sixth.sh glass profile checker      (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh visbuffer vbfits profile2  (about 3 minutes; ran)
-#   bash benchmarks/gpu_twenty_sixth.sh dacs barrier                (about 7 minutes)
+#   bash benchmarks/gpu_twenty_sixth.sh dacs barrier                (about 3 minutes; ran)
+#   bash benchmarks/gpu_twenty_sixth.sh launches crossover          (about 5 minutes)
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
@@ -36,6 +37,15 @@
 # barrier: the layer values materialized before the composite (.v/layer_barrier) against this
 #   tree, where XLA fuses the tail of the layer shader into the sort's payload gather (0.14
 #   ms). Prediction: 0.05-0.1 ms faster on glass.
+# launches: does a shader's time per point follow its launch's size? The visibility buffer's
+#   slope rose to deferred's when it launched deferred's tiers (1.04M lanes at once, not its
+#   524k-lane blocks). A guess: a large launch's intermediates between the shader's fusions
+#   spill out of the 50 MB L2 cache. Deferred and the visibility buffer on foliage, costs 0
+#   and 256, at the auto chunk and chunks 131072 and 32768 (blocks of 4 chunks a launch).
+#   Prediction if the guess holds: slopes fall with the launch size, below deferred's
+#   0.0127 ms/M at chunk 32768, and the cost-0 times rise with the reads.
+# crossover: deferred, checkerboard and DACS on foliage at costs 64 and 256 after DACS's steps
+#   (last session: DACS's line crossed deferred's at about 31 layers).
 . "$(dirname "$0")/gpu_env.sh"
 side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
   local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
@@ -81,6 +91,16 @@ for part in "$@"; do
   elif [ "$part" = barrier ]; then
     side_by_side barrier 120 "layer_barrier after" --scenes glass --pipelines deferred \
       checkerboard
+  elif [ "$part" = launches ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines deferred deferred:chunk=131072 deferred:chunk=32768 \
+      visbuffer visbuffer:chunk=32768 --costs 0 256 --frames 8 --repeats 5 --budget 180 \
+      --out "$OUT/launches.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/launches.md"
+  elif [ "$part" = crossover ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines deferred checkerboard dacs --costs 64 256 --frames 8 \
+      --repeats 5 --budget 180 --out "$OUT/crossover.jsonl" 2>&1 | quiet | grep -v '^{' \
+      | tee -a "$OUT/crossover.md"
   elif [ "$part" = checker ]; then
     side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
       --pipelines checkerboard
