@@ -4,7 +4,8 @@
 #   bash benchmarks/gpu_twenty_sixth.sh glass profile checker      (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh visbuffer vbfits profile2  (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh dacs barrier                (about 3 minutes; ran)
-#   bash benchmarks/gpu_twenty_sixth.sh launches crossover          (about 5 minutes)
+#   bash benchmarks/gpu_twenty_sixth.sh launches crossover          (about 4 minutes; ran)
+#   bash benchmarks/gpu_twenty_sixth.sh final                       (about 7 minutes)
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
@@ -46,6 +47,9 @@
 #   0.0127 ms/M at chunk 32768, and the cost-0 times rise with the reads.
 # crossover: deferred, checkerboard and DACS on foliage at costs 64 and 256 after DACS's steps
 #   (last session: DACS's line crossed deferred's at about 31 layers).
+# final: DACS (its steps) on every built-in scene; glass's pipelines whose transparent pass
+#   changed, in one run; deferred, checkerboard and DACS on foliage at cost 0 (the crossover's
+#   third point).
 . "$(dirname "$0")/gpu_env.sh"
 side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
   local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
@@ -101,6 +105,16 @@ for part in "$@"; do
       --scenes foliage --pipelines deferred checkerboard dacs --costs 64 256 --frames 8 \
       --repeats 5 --budget 180 --out "$OUT/crossover.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/crossover.md"
+  elif [ "$part" = final ]; then
+    export PYTHONPATH=$PWD:/tmp/site
+    timeout -k 5 320 $S --scenes stripes spheres foliage thin terrain sliver room many_small \
+      foliage_wind spheres_spin grass glass --pipelines dacs --json "$OUT/final_dacs.json" \
+      2>&1 | quiet | grep '^|' | tee -a "$OUT/final.md"
+    timeout -k 5 120 $S --scenes glass --pipelines deferred checkerboard visbuffer \
+      --json "$OUT/final_glass.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/final.md"
+    timeout -k 5 90 python3 benchmarks/bench_time_work.py --scenes foliage \
+      --pipelines deferred checkerboard dacs --costs 0 --frames 8 --repeats 5 \
+      --out "$OUT/cost0.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/final.md"
   elif [ "$part" = checker ]; then
     side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
       --pipelines checkerboard
