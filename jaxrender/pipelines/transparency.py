@@ -7,8 +7,11 @@ main pass and composites them here (``composite``); the reference does both per 
 
 Plan: the transparent triangles' fragment list (the opaque triangles made degenerate, so ids
 stay the scene's), every fragment strictly in front of the opaque depth of its pixel. Shade:
-those fragments, compacted into one work list, through the shared ``shade()`` plus the
-material's ``opacity`` (``layer_shader``). Reconstruct, by ``oit``:
+those fragments through the shared ``shade()`` plus the material's ``opacity``
+(``layer_shader``): with the auto chunk, every entry of the list's filled prefix in one launch
+with the test and the composite, those not in front as idle lanes (``blend_on_prefix``);
+with a chunk given, compacted into one work list and dispatched in chunks. Reconstruct, by
+``oit``:
 
 - "sorted": the exact per-pixel sort of the fragment list, back to front (or, for forward's
   ``sort_transparent = false``, in submission order), blended into a k-buffer of static depth
@@ -22,7 +25,8 @@ material's ``opacity`` (``layer_shader``). Reconstruct, by ``oit``:
   10 / (1e-5 + (z/5)^2 + (z/200)^6))), z the view depth; additive layers are added
   unattenuated (the order-independent approximation of their attenuation).
 
-Counts from the work: ``transparent_invocations`` (fragments shaded), ``transparent_layers_mean``
+Counts from the work: ``transparent_invocations`` (fragments shaded), ``transparent_lanes``
+(lanes launched for them), ``transparent_layers_mean``
 (over the pixels with a layer) and ``_max``, ``transparent_passes``, ``transparent_bytes``
 (each layer's k-buffer entry written and read). A scene without the transparency effect
 compiles none of this.
