@@ -5,7 +5,8 @@
 #   bash benchmarks/gpu_twenty_sixth.sh visbuffer vbfits profile2  (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh dacs barrier                (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh launches crossover          (about 4 minutes; ran)
-#   bash benchmarks/gpu_twenty_sixth.sh final                       (about 7 minutes)
+#   bash benchmarks/gpu_twenty_sixth.sh final                       (about 3 minutes; ran)
+#   bash benchmarks/gpu_twenty_sixth.sh forward                     (about 4 minutes)
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
@@ -50,6 +51,12 @@
 # final: DACS (its steps) on every built-in scene; glass's pipelines whose transparent pass
 #   changed, in one run; deferred, checkerboard and DACS on foliage at cost 0 (the crossover's
 #   third point).
+# forward: forward's shading list (its capacity the 8.3M-entry fragment list) takes the
+#   largest auto chunk, 2^18, so it launches blocks of 1.05M lanes: the size at which deferred
+#   paid 35% more per point (launches, above). Forward at the auto chunk against chunks 131072
+#   and 65536 (blocks of 524k and 262k lanes): room and glass at their default shaders,
+#   foliage at costs 0 and 256. Prediction: at 131072 forward's shading 20-25% cheaper per
+#   point (room: 0.2-0.35 ms a frame less, its shading being 1.47 ms), less a few host reads.
 . "$(dirname "$0")/gpu_env.sh"
 side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
   local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
@@ -115,6 +122,16 @@ for part in "$@"; do
     timeout -k 5 90 python3 benchmarks/bench_time_work.py --scenes foliage \
       --pipelines deferred checkerboard dacs --costs 0 --frames 8 --repeats 5 \
       --out "$OUT/cost0.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/final.md"
+  elif [ "$part" = forward ]; then
+    export PYTHONPATH=$PWD:/tmp/site
+    timeout -k 5 260 python3 benchmarks/bench_time_work.py --scenes room glass \
+      --pipelines forward forward:chunk=131072 forward:chunk=65536 --costs 0 --frames 8 \
+      --repeats 5 --budget 120 --out "$OUT/forward.jsonl" 2>&1 | quiet | grep -v '^{' \
+      | tee -a "$OUT/forward.md"
+    timeout -k 5 160 python3 benchmarks/bench_time_work.py --scenes foliage \
+      --pipelines forward forward:chunk=131072 forward:chunk=65536 --costs 0 256 --frames 8 \
+      --repeats 5 --budget 120 --out "$OUT/forward.jsonl" 2>&1 | quiet | grep -v '^{' \
+      | tee -a "$OUT/forward.md"
   elif [ "$part" = checker ]; then
     side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
       --pipelines checkerboard
