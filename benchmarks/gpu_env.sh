@@ -23,3 +23,21 @@ trees() {
       | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/$file"
   done
 }
+# side_by_side NAME SECONDS "TREE ..." ARGS...: the caller's $S in each tree (after: this
+# checkout, else .v/TREE), its tables tagged with the tree, in $OUT/NAME.md.
+side_by_side() {
+  local name=$1 limit=$2 names=$3 t R
+  shift 3
+  for t in $names; do
+    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $S "$@" --json "$OUT/${name}_$t.json" 2>&1 \
+      | quiet | grep '^|' | sed "s/^/$t: /" | tee -a "$OUT/$name.md"
+  done
+}
+prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
+  local pipe=$1 scene=$2 limit=$3
+  shift 3
+  PYTHONPATH=$PWD:/tmp/site timeout -k 5 "$limit" python3 benchmarks/profile_kernels.py "$pipe" \
+    --scene "$scene" --top 25 --calls 3 $(printf -- '--scope %s ' "$@") 2>&1 | quiet \
+    | tee -a "$OUT/profile.md"
+}

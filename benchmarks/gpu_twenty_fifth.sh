@@ -40,22 +40,6 @@
 #   passes, so the reads weigh more now. Prediction: dense 0.1-0.2 ms faster on foliage and
 #   room, equal on glass.
 . "$(dirname "$0")/gpu_env.sh"
-side_by_side() {  # side_by_side NAME SECONDS "TREE ..." ARGS...: $S in each tree (after: this
-  local name=$1 limit=$2 names=$3 t R  # checkout, else .v/TREE), tables tagged with the tree
-  shift 3
-  for t in $names; do
-    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $S "$@" --json "$OUT/${name}_$t.json" 2>&1 \
-      | quiet | grep '^|' | sed "s/^/$t: /" | tee -a "$OUT/$name.md"
-  done
-}
-prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
-  local pipe=$1 scene=$2 limit=$3
-  shift 3
-  PYTHONPATH=$PWD:/tmp/site timeout -k 5 "$limit" python3 benchmarks/profile_kernels.py "$pipe" \
-    --scene "$scene" --top 25 --calls 3 $(printf -- '--scope %s ' "$@") 2>&1 | quiet \
-    | tee -a "$OUT/profile.md"
-}
 S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in "$@"; do
   if [ "$part" = gbuffer ]; then
