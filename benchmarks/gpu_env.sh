@@ -1,7 +1,7 @@
 # Sourced by the device-call scripts: the checkout's root as the working folder, the carried
 # wheels (.whl/: trimesh, colour-science, xatlas) installed into /tmp/site, unbuffered output,
-# no GPU preallocation, quiet() to drop XLA's log lines, and trees() to run the sequence bench
-# in several trees side by side.
+# no GPU preallocation, quiet() to drop XLA's log lines, trees() and side_by_side() to run the
+# sequence bench in several trees side by side, and prof() for a program's kernels by scope.
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
