@@ -6,7 +6,8 @@
 #   bash benchmarks/gpu_twenty_sixth.sh dacs barrier                (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh launches crossover          (about 4 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh final                       (about 3 minutes; ran)
-#   bash benchmarks/gpu_twenty_sixth.sh forward                     (about 4 minutes)
+#   bash benchmarks/gpu_twenty_sixth.sh forward                     (about 4 minutes; ran)
+#   bash benchmarks/gpu_twenty_sixth.sh profile3                    (about 3 minutes)
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
@@ -57,6 +58,9 @@
 #   and 65536 (blocks of 524k and 262k lanes): room and glass at their default shaders,
 #   foliage at costs 0 and 256. Prediction: at 131072 forward's shading 20-25% cheaper per
 #   point (room: 0.2-0.35 ms a frame less, its shading being 1.47 ms), less a few host reads.
+# profile3: at the default shader checkerboard (1.78 ms) and DACS (2.26) are slower than
+#   deferred (1.61) on foliage, though they shade a half and a ninth of its points: where
+#   their frames go, kernels by scope, beside deferred's.
 . "$(dirname "$0")/gpu_env.sh"
 S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in "$@"; do
@@ -116,6 +120,10 @@ for part in "$@"; do
       --pipelines forward forward:chunk=131072 forward:chunk=65536 --costs 0 256 --frames 8 \
       --repeats 5 --budget 120 --out "$OUT/forward.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/forward.md"
+  elif [ "$part" = profile3 ]; then
+    prof deferred foliage 60 visibility gbuffer lighting
+    prof checkerboard foliage 60 visibility plan shade spatial temporal counts
+    prof dacs foliage 60 visibility dacs decide interpolate shade
   elif [ "$part" = checker ]; then
     side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
       --pipelines checkerboard
