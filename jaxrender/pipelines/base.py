@@ -34,7 +34,9 @@ class PipelineConfig(RenderConfig):
         0 (the default) sizes it to the work list (``dispatch.auto_chunk``: about sixteen
         chunks for a full screen; DACS's levels: ``dispatch.MIN_CHUNK``; object space's store
         and TADS's texels: half a screen and a screen, not their capacity), except deferred's
-        screen passes, which then launch once (``dispatch.shade_screen``).
+        screen passes, which then launch once (``dispatch.shade_screen``), and the transparent
+        pass, which then tests, shades and blends its list in one launch
+        (``transparency.blend_on_prefix``).
     cull_backfaces: drop back-facing triangles in the rasterizer.
     fragment_capacity: size of the fragment list per sample (0 = 4 x width x height); a frame
         with more fragments reports ``overflow`` and, called eagerly, raises OverflowError.

@@ -183,7 +183,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     # four times the lanes DACS shades; benchmarks/RESULTS.md, ninth and twelfth sessions.
     level_chunk = int(chunk) if int(chunk) > 0 else dispatch.MIN_CHUNK  # run() caps it at the list
 
-    def level_body(step, carry):
+    def step_body(step, carry):
         img, needs, inv, lanes, chunks = carry
         pix, live, level = t["pix"][step], t["live"][step], t["level"][step]
         pidx, ins, wts = t["pidx"][step], t["ins"][step], t["wts"][step]
@@ -210,7 +210,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
 
     z = jnp.int32(0)
     init = (jnp.zeros((n_pix, 3), jnp.float32), jnp.zeros((n_steps, piece), bool), z, z, z)
-    img, needs, inv, lanes, chunks = jax.lax.fori_loop(0, n_steps, level_body, init)
+    img, needs, inv, lanes, chunks = jax.lax.fori_loop(0, n_steps, step_body, init)
     by_level = [[needs[k, :b - a] for k, (lv, a, b) in enumerate(tab["steps"]) if lv == level]
                 for level in range(len(tab["sizes"]))]
     warp = dacs_warp.simulate([jnp.concatenate(parts) if parts else jnp.zeros((0,), bool)

@@ -7,7 +7,9 @@ over it in whole chunks of a static size, like DispatchIndirect: the compiled pr
 the shader over the chunks that hold work (``launch_mode``: in a loop, or in one launch of a
 power-of-two number of chunks), never over the full screen with a mask. The counts are read
 off that same work list, so they cannot disagree with the work done (``count`` items,
-``chunks * chunk`` lanes launched).
+``chunks * chunk`` lanes launched). One pass shades elsewhere: the transparent pass's test,
+shading and composite share one launch over the fragment list's filled prefix, its lanes
+behind the opaque depth idle (``transparency.blend_on_prefix``).
 """
 
 from __future__ import annotations
@@ -121,8 +123,9 @@ def launch_mode(default: str = DEFAULT_LAUNCH) -> str:
 
 def named_launch_mode() -> str:
     """The launch mode ``JAXRENDER_DISPATCH`` names ("" when unset): it also sends deferred's
-    screen passes back to the chunked dispatch (``shade_screen``), so a program depends on
-    whether a mode is named, not only on the mode in force."""
+    screen passes (``shade_screen``) and the transparent pass (``transparency.transparent_pass``)
+    back to the chunked dispatch, so a program depends on whether a mode is named, not only on
+    the mode in force."""
     said = os.environ.get(ENV_LAUNCH, "").strip().lower()
     if said and said not in LAUNCH_MODES:
         raise ValueError(f"{ENV_LAUNCH}={said!r}: expected one of {', '.join(LAUNCH_MODES)}")

@@ -33,8 +33,8 @@ from jaxrender.pipelines.quads import (BIG, exclusive_lane_cummin, exclusive_seg
                                        quad_list, segment_starts)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
-from jaxrender.pipelines.transparency import (LAYER_CHANNELS, forward_blend, forward_front,
-                                              forward_split, layer_shader)
+from jaxrender.pipelines.forward_transparency import forward_blend, forward_front, forward_split
+from jaxrender.pipelines.transparency import LAYER_CHANNELS, layer_shader
 from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
                                             points_at_xy, raster_fragments)
 from jaxrender.pipelines.waves import check_wave_size

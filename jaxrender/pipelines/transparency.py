@@ -10,8 +10,8 @@ stay the scene's), every fragment strictly in front of the opaque depth of its p
 those fragments through the shared ``shade()`` plus the material's ``opacity``
 (``layer_shader``): with the auto chunk, every entry of the list's filled prefix in one launch
 with the test and the composite, those not in front as idle lanes (``blend_on_prefix``);
-with a chunk given, compacted into one work list and dispatched in chunks. Reconstruct, by
-``oit``:
+with a chunk given or a ``JAXRENDER_DISPATCH`` mode named, compacted into one work list and
+dispatched in chunks. Reconstruct, by ``oit``:
 
 - "sorted": the exact per-pixel sort of the fragment list, back to front (or, for forward's
   ``sort_transparent = false``, in submission order), blended into a k-buffer of static depth
@@ -25,8 +25,7 @@ with a chunk given, compacted into one work list and dispatched in chunks. Recon
   10 / (1e-5 + (z/5)^2 + (z/200)^6))), z the view depth; additive layers are added
   unattenuated (the order-independent approximation of their attenuation).
 
-Counts from the work: ``transparent_invocations`` (fragments shaded), ``transparent_lanes``
-(lanes launched for them), ``transparent_layers_mean``
+Counts from the work: ``transparent_invocations`` (fragments shaded), ``transparent_layers_mean``
 (over the pixels with a layer) and ``_max``, ``transparent_passes``, ``transparent_bytes``
 (each layer's k-buffer entry written and read). A scene without the transparency effect
 compiles none of this.
@@ -48,7 +47,7 @@ from jaxrender.pipelines.visibility import (clip_vertices, faces_where, is_trans
                                             raster_fragments)
 from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
 from jaxrender.shading import opacity, shade, view_depth
-from jaxrender.sorting import lex_sort, on_prefix
+from jaxrender.sorting import lex_sort, on_prefix, prefix_sizes
 from jaxrender.types import Array
 
 LAYER_BYTES = 20  # a k-buffer entry: premultiplied RGB and transmittance (4 float32), a depth
@@ -171,8 +170,10 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
         with jax.named_scope("fragments"):
             fr = transparent_fragments(scene, clip, cfg)
         if int(cfg.chunk) == 0 and not dispatch.named_launch_mode():
-            out, counts = blend_on_prefix(scene, camera, clip, fr, image.reshape(-1, 3),
-                                          opaque_depth.reshape(-1), cfg)
+            # Its lanes are left out of the counts: they follow the list's capacity, which
+            # like ``chunk`` must leave a frame's counts as they are (OUTPUT_NEUTRAL).
+            out, counts, _ = blend_on_prefix(scene, camera, clip, fr, image.reshape(-1, 3),
+                                             opaque_depth.reshape(-1), cfg)
             return out.reshape(h, w, 3), counts
         with jax.named_scope("front"):
             front, work = front_work(fr, opaque_depth.reshape(-1), w * h)
@@ -185,37 +186,51 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
         with jax.named_scope("composite"):
             out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts["transparent_invocations"] = work.invocations
-    counts["transparent_lanes"] = work.lanes
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return out.reshape(h, w, 3), counts
 
 
 def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Array, cfg):
     """``transparent_pass``'s depth test, shading and composite in one launch over the fragment
-    list's filled prefix (``on_prefix``: one host read): every entry of the prefix runs the
-    layer shader, those not in front as idle lanes, where the chunked dispatch would read the
-    host once a launch and scatter into a list-sized array. The prefix sizes step by at most
-    1.5x, so at most a third of the lanes idle past the live fragments. Returns (image
-    float32[P, 3], counts, with the lanes launched in ``transparent_lanes``)."""
+    list's filled prefix (``on_prefix``: one host read), where the chunked dispatch reads the
+    host once a launch and scatters into an array the size of the whole list. Past the shortest
+    prefix every entry runs the layer shader, those not in front as idle lanes: the prefix
+    lengths step by at most 1.5x, so at most a third of the lanes idle past the live fragments.
+    A list that fits the shortest prefix (an eighth of its capacity, half a screen by default)
+    has its front fragments compacted and shaded in chunks instead, so that a few fragments do
+    not launch half a screen of lanes. Each prefix length compiles its own copy of the layer
+    shader, and the longest shades the whole capacity at once (its temporaries included).
+    Returns (image float32[P, 3], counts, the layer shader's lanes launched int32)."""
     n_pix, shader, settings = background.shape[0], layer_shader(scene, camera), settings_of(cfg)
+    shortest = prefix_sizes(fr.pixel.shape[0])[0]
 
     def on_filled(part, bg):
         valid, pixel, tri, depth = part
         front = in_front(valid, pixel, depth, opaque_depth, n_pix)
+
+        def points_of(items):
+            return points_at(scene, camera, clip, cfg, tri[items], pixel[items])
+
         with jax.named_scope("layer_shading"):
-            points = points_at(scene, camera, clip, cfg, tri, pixel)
-            values = shader(dataclasses.replace(points, valid=points.valid & front))
+            if pixel.shape[0] == shortest:
+                values = jnp.zeros((shortest, LAYER_CHANNELS), jnp.float32)
+                values, work = dispatch.shade(dispatch.WorkList.of(front), points_of, shader,
+                                              values)
+                lanes = work.lanes
+            else:
+                points = points_of(jnp.arange(pixel.shape[0], dtype=jnp.int32))
+                values = shader(dataclasses.replace(points, valid=points.valid & front))
+                lanes = jnp.int32(pixel.shape[0])
         with jax.named_scope("composite"):
             image, counts = composite_list(scene, Layers(pixel, tri, depth, front, values), bg,
                                            settings)
-        counts["transparent_lanes"] = jnp.int32(pixel.shape[0])
-        return (), (image, counts)
+        return (), (image, counts, lanes)
 
-    _, (image, counts) = on_prefix(on_filled, live_fragments(fr),
-                                   (fr.valid, fr.pixel, fr.tri, fr.depth), background)
+    _, (image, counts, lanes) = on_prefix(on_filled, live_fragments(fr),
+                                          (fr.valid, fr.pixel, fr.tri, fr.depth), background)
     counts["transparent_invocations"] = counts["transparent_fragments"]
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
-    return image, counts
+    return image, counts, lanes
 
 
 def merge_counts(counts: dict, transparent: dict) -> dict:
@@ -354,53 +369,9 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
     return mean * (1.0 - reveal)[:, None] + reveal[:, None] * background + glow
 
 
-__all__ = ["blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list", "forward_blend",
-           "forward_front", "forward_split", "front_work", "in_front", "LAYER_BYTES",
+__all__ = ["blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list",
+           "front_work", "in_front", "LAYER_BYTES",
            "layer_shader", "Layers", "live_fragments", "merge_counts",
            "refuse_transparency", "settings_of", "shade_layers",
            "sorted_composite", "transparent_fragments", "transparent_pass", "wboit_weight",
            "weighted_composite"]
-
-
-# ---------------------------------------------------------------- forward's main pass
-
-
-def forward_split(scene, draw, cfg):
-    """(forward's draw list without its transparent fragments, bool[F] the transparent
-    fragments), or (draw, None) for a scene without transparency."""
-    check_settings(scene, cfg)
-    if not scene.effects.transparency:
-        return draw, None
-    if draw.samples > 1 or cfg.shade_helpers:
-        refuse_transparency(scene, "forward with msaa > 1 or shade_helpers")
-    transparent = is_transparent(scene, draw.tri) & draw.valid
-    return draw._replace(valid=draw.valid & ~transparent), transparent
-
-
-def forward_front(draw, transparent, keep, cfg):
-    """bool[F]: the transparent fragments in front of the final opaque depth of their pixel
-    (drawn after the opaque ones, as engines order them), or None."""
-    if transparent is None:
-        return None
-    n_pix = cfg.width * cfg.height
-    z = jnp.full((n_pix,), jnp.inf).at[draw.slot].min(jnp.where(keep, draw.depth, jnp.inf),
-                                                       mode="drop")
-    return transparent & (draw.depth < z.at[draw.slot].get(mode="fill", fill_value=-jnp.inf))
-
-
-def forward_blend(scene, draw, front, values, image, counts: dict, cfg):
-    """Blend forward's shaded transparent units (``values`` from its main pass) over its opaque
-    image; their shading is already in ``shade_invocations``. Returns (image, counts)."""
-    if front is None:
-        return image, counts
-    h, w = image.shape[:2]
-    live = jnp.minimum(draw.fragments, draw.pixel.shape[0])  # one sample: a sorted prefix
-    layers = Layers(draw.pixel, draw.tri, draw.depth, front, values, live)
-    with jax.named_scope("transparent"):
-        out, extra = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
-    counts = dict(counts, **{k: v for k, v in extra.items() if k != "overflow"},
-                  transparent_invocations=jnp.sum(front, dtype=jnp.int32))
-    counts["bytes_intermediate"] = counts["bytes_intermediate"] + extra["transparent_bytes"]
-    counts["overflow"] = counts["overflow"] + extra["overflow"]
-    return out.reshape(h, w, 3), counts
-

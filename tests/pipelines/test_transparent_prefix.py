@@ -1,7 +1,7 @@
 """The transparent pass reads only its fragment list's filled prefix: the front test and its
-work list (``front_work``) against NumPy over the whole list, and the composite with ``live``
-against the composite of the whole list, on random lists whose counts fall on both sides of the
-prefix lengths."""
+work list (``front_work``) against NumPy over the whole list, the composite with ``live``
+against the composite of the whole list, and the one-launch pass (``blend_on_prefix``) against
+the chunked one, on random lists whose counts fall on both sides of the prefix lengths."""
 
 from __future__ import annotations
 
@@ -13,8 +13,11 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import get_pipeline, make_config
-from jaxrender.pipelines.transparency import (BlendSettings, Layers, composite, composite_list,
-                                              front_work)
+from jaxrender.pipelines.dispatch import ENV_LAUNCH
+from jaxrender.pipelines.transparency import (BlendSettings, Layers, blend_on_prefix, composite,
+                                              composite_list, front_work, settings_of,
+                                              shade_layers)
+from jaxrender.pipelines.visibility import clip_vertices, points_at
 from jaxrender.raster.fragments import Fragments
 from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
 from jaxrender.sorting import prefix_sizes
@@ -111,26 +114,71 @@ def test_no_layer_in_front_leaves_the_background_bit_for_bit(settings):
         assert int(counts["transparent_fragments"]) == 0, (count, settings)
 
 
-@pytest.mark.parametrize("pipeline", ["deferred", "checkerboard"])
-def test_the_one_launch_pass_blends_and_counts_as_the_chunked_dispatch(pipeline):
-    """With the auto chunk the transparent pass tests, shades and blends the list's filled prefix
-    in one launch (``blend_on_prefix``); with a chunk given it dispatches its work list in
-    chunks. Same image to float32 rounding, same counts; the one launch's lanes are a prefix
-    length that holds the live fragments, the chunks' whole chunks over those in front."""
+@pytest.mark.parametrize("params", [{"transparent_layers": 2}, {"oit": "weighted"}],
+                         ids=["sorted", "weighted"])
+def test_the_one_launch_pass_is_the_chunked_pass(params):
+    """``blend_on_prefix`` (the test, the layer shader and the composite in one launch over the
+    filled prefix; compacted in chunks below the shortest prefix) against the chunked pass
+    (``front_work``, ``shade_layers``, ``composite``) on random lists of the three-quad scene's
+    transparent triangles, their counts on both sides of the prefix lengths: the same image and
+    counts; lanes hand-worked (the shortest prefix, 150 entries: one 150-lane chunk, or none
+    with nothing in front; past it, the prefix length that holds the list)."""
+    scene = layered_quads(THREE)
+    cfg = make_config("deferred", width=8, height=8, **params)  # N_PIX pixels
+    clip = clip_vertices(scene, scene.camera, cfg)
+
+    def chunked(fr, opaque, background):
+        front, work = front_work(fr, opaque, N_PIX)
+
+        def points_of(items):
+            return points_at(scene, scene.camera, clip, cfg, fr.tri[items], fr.pixel[items])
+
+        layers, work = shade_layers(scene, scene.camera, fr, front, work, points_of, 64)
+        image, counts = composite(scene, layers, background, settings_of(cfg))
+        return image, dict(counts, transparent_invocations=work.invocations)
+
+    one = jax.jit(lambda fr, opaque, bg: blend_on_prefix(scene, scene.camera, clip, fr, bg,
+                                                         opaque, cfg))
+    chunked = jax.jit(chunked)
+    for count in COUNTS:
+        rng = np.random.default_rng(count + 23)
+        fr = dataclasses.replace(_fragments(count, rng), tri=jnp.asarray(
+            np.where(np.arange(N) < count, rng.choice([2, 4, 6], N), 0), jnp.int32))
+        opaque = jnp.asarray(rng.random(N_PIX), jnp.float32)
+        background = jnp.asarray(rng.random((N_PIX, 3)), jnp.float32)
+        want_image, want_counts = chunked(fr, opaque, background)
+        got_image, got_counts, lanes = one(fr, opaque, background)
+        np.testing.assert_allclose(np.asarray(got_image), np.asarray(want_image), rtol=1e-6,
+                                   atol=1e-7, err_msg=f"image, count {count}, {params}")
+        for k, v in want_counts.items():
+            np.testing.assert_array_equal(np.asarray(got_counts[k]), np.asarray(v),
+                                          err_msg=f"{k}, count {count}, {params}")
+        shaded = int(want_counts["transparent_invocations"])
+        assert (shaded > 0) == (count > 0), (count, shaded)
+        want_lanes = (150 * (shaded > 0) if count <= 150
+                      else min(m for m in prefix_sizes(N) if m >= count))
+        assert int(lanes) == want_lanes, (count, shaded, int(lanes), params)
+
+
+def test_the_pass_leaves_a_deferred_frame_as_its_neutral_settings_promise(monkeypatch):
+    """The auto chunk takes the one-launch pass, a chunk given (or a launch mode named) the
+    chunked one, and a longer fragment list other prefix lengths: ``chunk`` and
+    ``fragment_capacity`` are OUTPUT_NEUTRAL, so the image bit for bit and every count stay as
+    they are. (Checkerboard, DACS and the visibility buffer call the same pass.)"""
+    monkeypatch.delenv(ENV_LAUNCH, raising=False)
     scene = layered_quads(THREE)
     w, h = 32, 18
-    frames = {chunk: get_pipeline(pipeline).render(
-        scene, scene.camera, make_config(pipeline, width=w, height=h, chunk=chunk))
-        for chunk in (0, 64)}
-    one, chunked = frames[0], frames[64]
-    np.testing.assert_allclose(np.asarray(one.image), np.asarray(chunked.image), atol=1e-6,
-                               rtol=0, err_msg=f"{pipeline}: one launch against chunks of 64")
-    for key in ("transparent_invocations", "transparent_fragments", "transparent_layers_max",
-                "transparent_passes", "shade_invocations"):
-        assert int(one.counts[key]) == int(chunked.counts[key]), (pipeline, key)
-    shaded = int(one.counts["transparent_invocations"])
-    assert shaded > 0, pipeline
-    assert int(chunked.counts["transparent_lanes"]) == -(-shaded // 64) * 64, pipeline
-    capacity = make_config(pipeline, width=w, height=h).capacity
-    assert int(one.counts["transparent_lanes"]) in prefix_sizes(capacity), pipeline
-    assert int(one.counts["transparent_lanes"]) >= shaded, pipeline
+    assert {"chunk", "fragment_capacity"} <= set(make_config("deferred").OUTPUT_NEUTRAL)
+    frames = {name: get_pipeline("deferred").render(
+        scene, scene.camera, make_config("deferred", width=w, height=h, **params))
+        for name, params in [("one launch", {}), ("chunks of 64", {"chunk": 64}),
+                             ("a longer list", {"fragment_capacity": 16 * w * h})]}
+    want = frames["one launch"]
+    assert int(want.counts["transparent_invocations"]) > 0
+    for name, got in frames.items():
+        np.testing.assert_array_equal(np.asarray(got.image), np.asarray(want.image),
+                                      err_msg=f"{name} against the one launch")
+        assert set(got.counts) == set(want.counts), name
+        for key, value in want.counts.items():
+            np.testing.assert_array_equal(np.asarray(got.counts[key]), np.asarray(value),
+                                          err_msg=f"{name}: {key}")
