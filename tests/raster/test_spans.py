@@ -87,27 +87,40 @@ def test_peeled_first_chunk_changes_nothing(rng, traversal):
 
     clip, faces = _random_scene(rng, "mixed_sizes")
     n = faces.shape[0]
+    # One program per (capacity, peel), shared by its cases: the items' mask and the number of
+    # further steps are arguments. (A fresh jit per case compiled 12 programs for these 4.)
+    programs = {}
+
+    def program(capacity, peel):
+        if (capacity, peel) in programs:
+            return programs[capacity, peel]
+
+        def fn(st, c):
+            zb, order = st
+            pix = jnp.where(c.covered, c.py * W + c.px, W * H)
+            # order-sensitive: a running hash of the covered items, chunk by chunk
+            key = (c.tri.astype(jnp.int64) + 1) * (pix.astype(jnp.int64) + 7)
+            h = jnp.sum(jnp.where(c.covered, key, 0))
+            return zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop"), order * 31 + h
+
+        def then_body(k, carry):  # stands in for the clip chunks: order-sensitive too
+            (zb, order), items = carry
+            return (zb, order * 37 + k + 1), items + 10 * (k + 1)
+
+        def chunks(t, m):
+            init = (jnp.full((W * H,), (1 << 63) - 1, jnp.int64), jnp.int64(0))
+            return for_each_chunk(t, SetupFn(W, H, False), capacity,
+                                  jnp.asarray([128, 128], jnp.int64), init, fn, traversal,
+                                  peel=peel, then=(m, then_body))
+
+        programs[capacity, peel] = jax.jit(chunks)
+        return programs[capacity, peel]
 
     def run(ok, capacity, peel, n_then):
         with jax.enable_x64(True):
-            def fn(st, c):
-                zb, order = st
-                pix = jnp.where(c.covered, c.py * W + c.px, W * H)
-                # order-sensitive: a running hash of the covered items, chunk by chunk
-                key = (c.tri.astype(jnp.int64) + 1) * (pix.astype(jnp.int64) + 7)
-                h = jnp.sum(jnp.where(c.covered, key, 0))
-                return zb.at[pix].min(depth_key(c.depth, c.tri), mode="drop"), order * 31 + h
-
-            def then_body(k, carry):  # stands in for the clip chunks: order-sensitive too
-                (zb, order), items = carry
-                return (zb, order * 37 + k + 1), items + 10 * (k + 1)
-
             tris = Triangles(jnp.asarray(clip), jnp.asarray(faces), jnp.asarray(ok),
                              jnp.arange(n, dtype=jnp.int32))
-            init = (jnp.full((W * H,), (1 << 63) - 1, jnp.int64), jnp.int64(0))
-            (zb, order), items = jax.jit(lambda t, m: for_each_chunk(
-                t, SetupFn(W, H, False), capacity, jnp.asarray([128, 128], jnp.int64), init,
-                fn, traversal, peel=peel, then=(m, then_body)))(tris, jnp.int64(n_then))
+            (zb, order), items = program(capacity, peel)(tris, jnp.int64(n_then))
             return np.asarray(zb), int(order), int(items)
 
     for ok, capacity in ((np.ones(n, bool), 256), (np.ones(n, bool), 1 << 20),
