@@ -20,7 +20,9 @@ from jaxrender.pipelines.reference import (
     convergence_psnr,
     render,
 )
-from jaxrender.raster import fragments, rasterize
+from jaxrender.raster import rasterize
+from jaxrender.raster.fragments import collect_fragments, default_fragment_capacity
+from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity
 from jaxrender.raster import samples as sample_patterns
 from jaxrender.raster.resolve import barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
@@ -252,10 +254,19 @@ def test_alpha_test_runs_on_covered_samples_of_tested_triangles_only(scene_a):
     scene, cam, k = _alpha_scene(), _camera(0.07), 3
     frames = {n: render(scene, cam, _cfg(k, samples_per_pass=n)) for n in (1, 4)}
     clip = world_to_clip(scene.positions, cam, W / H)
-    offsets = sample_patterns.stratified(k)
+    offsets = sample_patterns.to_fixed(sample_patterns.stratified(k), SUBPIXEL_BITS)
+    # The fragment list of each sample, on its own: ``fragments``' core with the sample's
+    # offset an argument, so one compile serves the 9 samples (the public entry takes the
+    # offset as a static argument: 9 compiles). Its default capacities, its overflow checked.
+    n_tris = scene.faces.shape[0]
+    cap = default_fragment_capacity(W, H)
+    one_sample = jax.jit(lambda c, f, off: collect_fragments(
+        c, f, W, H, cap, False, off, default_work_capacity(n_tris, W, H),
+        default_clip_capacity(n_tris)))
     want = 0
-    for off in offsets:  # the fragment list of each sample, on its own
-        fr = fragments(clip, scene.faces, W, H, sample_offset=tuple(off))
+    for off in offsets:
+        fr = one_sample(clip, scene.faces, jnp.asarray(off, jnp.int32))
+        assert 0 < int(fr.count) <= cap, (off, int(fr.count))
         tri = np.asarray(fr.tri)[np.asarray(fr.valid)]
         want += int(np.sum(np.isin(tri, (0, 1))))
     assert want > 0
