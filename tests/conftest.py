@@ -61,16 +61,20 @@ def _compiled_programs_released():
     memory_maps.release_if_crowded()
 
 
-# The files that take longest on the 2-core CI machine (pytest --durations, 2026-12-03), handed
-# to the xdist workers first: with --dist loadfile a file runs whole on one worker, and one of
-# them started last (test_installed.py, minutes of subprocess compiles) left the other worker
-# idle at the end of the run.
+# The files that take longest on the 2-core CI machine (pytest --durations=0, 2026-12-06,
+# per-file sums), handed to the xdist workers first: with --dist loadfile a file runs whole on
+# one worker, and a long file dispatched last (test_installed.py, minutes of subprocess
+# compiles, once; test_reference.py and test_transparency.py were not listed at all) leaves the
+# other worker idle at the end of the run.
 LONGEST_FIRST = (
-    "tests/test_installed.py", "tests/raster/test_spans.py", "tests/pipelines/test_object_space.py",
-    "tests/pipelines/test_tads.py", "tests/raster/test_donate.py",
-    "tests/pipelines/test_vertex_work.py", "tests/study/test_sequences.py",
-    "tests/study/test_runner.py", "tests/pipelines/test_visbuffer.py",
-    "tests/pipelines/test_micro_batch.py",
+    "tests/test_installed.py", "tests/pipelines/test_reference.py",
+    "tests/pipelines/test_transparency.py", "tests/study/test_sequences.py",
+    "tests/study/test_time_study.py", "tests/raster/test_multi_sample.py",
+    "tests/pipelines/test_forward.py", "tests/pipelines/test_transparent_prefix.py",
+    "tests/raster/test_spans.py", "tests/study/test_runner.py",
+    "tests/pipelines/test_waves_and_worklists.py", "tests/pipelines/test_taa.py",
+    "tests/pipelines/test_vertex_work.py", "tests/pipelines/test_visbuffer.py",
+    "tests/pipelines/test_object_space.py", "tests/pipelines/test_micro_batch.py",
 )
 
 
