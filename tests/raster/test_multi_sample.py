@@ -3,6 +3,8 @@ buffer must be the one it gets alone, bit for bit, on every traversal, with clip
 a keep filter, dead samples and chunks far smaller than the work; its box is the union of the
 samples' boxes, so it lists fewer work items than the samples one by one."""
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -21,6 +23,33 @@ def _clipped_scene(rng):
     return pad(gl_clip(p, aspect=W / H), np.arange(300).reshape(-1, 3).astype(np.int32))
 
 
+def _keep_odd(chunk):
+    return chunk.tri % 2 == 1, jnp.sum(chunk.covered)
+
+
+def _keep_odd_many(chunk):
+    return (chunk.tri % 2 == 1)[None], jnp.sum(chunk.covered)
+
+
+@functools.lru_cache(maxsize=None)
+def _programs(traversal):
+    """(many samples, one sample) programs of a traversal, shared by both scene kinds (padded
+    to the same shapes): the compile is most of each case's time."""
+    kw = dict(work_capacity=512, clip_capacity=7, traversal=traversal)
+
+    @jax.jit
+    def many(c, f, o, lv):
+        return (sample_visibility(c, f, W, H, o, live=lv, **kw),
+                sample_visibility(c, f, W, H, o, live=lv, keep=_keep_odd_many, **kw))
+
+    @jax.jit
+    def one(c, f, o):
+        return (sample_visibility(c, f, W, H, o, **kw),
+                sample_visibility(c, f, W, H, o, keep=_keep_odd, **kw))
+
+    return many, one
+
+
 @pytest.mark.parametrize("traversal", ["bbox", "recompute", "spans", "gpu"])
 @pytest.mark.parametrize("kind", ["mixed_sizes", "clipped"])
 def test_each_sample_equals_its_own_traversal(rng, traversal, kind):
@@ -30,20 +59,7 @@ def test_each_sample_equals_its_own_traversal(rng, traversal, kind):
     live = np.ones(n, bool)
     live[rng.integers(n)] = False
     offsets[~live] = offsets[live][0]  # a dead sample repeats a live one's offset
-    keep_odd = lambda chunk: (chunk.tri % 2 == 1, jnp.sum(chunk.covered))  # noqa: E731
-    keep_odd_many = lambda chunk: ((chunk.tri % 2 == 1)[None], jnp.sum(chunk.covered))  # noqa: E731
-    kw = dict(work_capacity=512, clip_capacity=7, traversal=traversal)
-
-    @jax.jit
-    def many(c, f, o, lv):
-        return (sample_visibility(c, f, W, H, o, live=lv, **kw),
-                sample_visibility(c, f, W, H, o, live=lv, keep=keep_odd_many, **kw))
-
-    @jax.jit
-    def one(c, f, o):
-        return (sample_visibility(c, f, W, H, o, **kw),
-                sample_visibility(c, f, W, H, o, keep=keep_odd, **kw))
-
+    many, one = _programs(traversal)
     c, f = jnp.asarray(clip), jnp.asarray(faces)
     (vis, counts), (odd, odd_counts) = many(c, f, jnp.asarray(offsets), jnp.asarray(live))
     fragments, items = 0, 0
