@@ -1,6 +1,7 @@
 """Transparency: blended quads against the hand-computed over composite in every pipeline and
 submission order, the layer cap's further passes and its named error, weighted blended OIT
-against its analytic formula, and an opaque scene compiling no transparent pass.
+against its analytic formula, an opaque scene compiling no transparent pass, and the pass
+leaving a frame as its output-neutral settings promise.
 
 The quads are lit by ambient light of 1 alone, so a surface's radiance is its albedo; the
 middle of the screen is covered by every quad. One scene shape per layer count, so each
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 
 from jaxrender.pipelines import PipelineOverflow, get_pipeline, make_config
+from jaxrender.pipelines.dispatch import ENV_LAUNCH
 from tests.pipelines.transparent_scenes import BACKGROUND, BLUE, THREE, TWO, layered_quads, over
 
 W, H = 32, 18
@@ -151,3 +153,25 @@ def test_blending_settings_are_refused_without_transparency():
         make_config("forward", oit="weighted", sort_transparent=False)
     with pytest.raises(ValueError, match="tads does not render transparent"):
         _render(layered_quads(TWO), "tads")
+
+
+def test_the_pass_leaves_a_deferred_frame_as_its_neutral_settings_promise(monkeypatch):
+    """The auto chunk takes the one-launch pass, a chunk given (or a launch mode named) the
+    chunked one, and a longer fragment list other prefix lengths: ``chunk`` and
+    ``fragment_capacity`` are OUTPUT_NEUTRAL, so the image bit for bit and every count stay as
+    they are. (Checkerboard, DACS and the visibility buffer call the same pass.)"""
+    monkeypatch.delenv(ENV_LAUNCH, raising=False)
+    scene = layered_quads(THREE)
+    assert {"chunk", "fragment_capacity"} <= set(make_config("deferred").OUTPUT_NEUTRAL)
+    frames = {name: _render(scene, "deferred", **params)  # the first as the tests above
+              for name, params in [("one launch", {}), ("chunks of 64", {"chunk": 64}),
+                                   ("a longer list", {"fragment_capacity": 16 * W * H})]}
+    want = frames["one launch"]
+    assert int(want.counts["transparent_invocations"]) > 0
+    for name, got in frames.items():
+        np.testing.assert_array_equal(np.asarray(got.image), np.asarray(want.image),
+                                      err_msg=f"{name} against the one launch")
+        assert set(got.counts) == set(want.counts), name
+        for key, value in want.counts.items():
+            np.testing.assert_array_equal(np.asarray(got.counts[key]), np.asarray(value),
+                                          err_msg=f"{name}: {key}")

@@ -12,8 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrender.pipelines import get_pipeline, make_config
-from jaxrender.pipelines.dispatch import ENV_LAUNCH
+from jaxrender.pipelines import make_config
 from jaxrender.pipelines.transparency import (BlendSettings, Layers, blend_on_prefix, composite,
                                               composite_list, front_work, settings_of,
                                               shade_layers)
@@ -158,27 +157,3 @@ def test_the_one_launch_pass_is_the_chunked_pass(params):
         want_lanes = (150 * (shaded > 0) if count <= 150
                       else min(m for m in prefix_sizes(N) if m >= count))
         assert int(lanes) == want_lanes, (count, shaded, int(lanes), params)
-
-
-def test_the_pass_leaves_a_deferred_frame_as_its_neutral_settings_promise(monkeypatch):
-    """The auto chunk takes the one-launch pass, a chunk given (or a launch mode named) the
-    chunked one, and a longer fragment list other prefix lengths: ``chunk`` and
-    ``fragment_capacity`` are OUTPUT_NEUTRAL, so the image bit for bit and every count stay as
-    they are. (Checkerboard, DACS and the visibility buffer call the same pass.)"""
-    monkeypatch.delenv(ENV_LAUNCH, raising=False)
-    scene = layered_quads(THREE)
-    w, h = 32, 18
-    assert {"chunk", "fragment_capacity"} <= set(make_config("deferred").OUTPUT_NEUTRAL)
-    frames = {name: get_pipeline("deferred").render(
-        scene, scene.camera, make_config("deferred", width=w, height=h, **params))
-        for name, params in [("one launch", {}), ("chunks of 64", {"chunk": 64}),
-                             ("a longer list", {"fragment_capacity": 16 * w * h})]}
-    want = frames["one launch"]
-    assert int(want.counts["transparent_invocations"]) > 0
-    for name, got in frames.items():
-        np.testing.assert_array_equal(np.asarray(got.image), np.asarray(want.image),
-                                      err_msg=f"{name} against the one launch")
-        assert set(got.counts) == set(want.counts), name
-        for key, value in want.counts.items():
-            np.testing.assert_array_equal(np.asarray(got.counts[key]), np.asarray(value),
-                                          err_msg=f"{name}: {key}")
