@@ -8,7 +8,7 @@
 #   bash benchmarks/gpu_twenty_sixth.sh final                       (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh forward                     (about 4 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh profile3                    (about 1 minute; ran)
-#   bash benchmarks/gpu_twenty_sixth.sh profile4                    (about 2 minutes)
+#   bash benchmarks/gpu_twenty_sixth.sh profile4                    (about 2 minutes; not yet run)
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
