@@ -132,6 +132,12 @@ def named_launch_mode() -> str:
     return said
 
 
+def launches_once(chunk: int) -> bool:
+    """Whether a pass that can launch its whole list at once does: with the auto chunk and no
+    ``JAXRENDER_DISPATCH`` mode named (a chunk given, or a mode named, asks for chunks)."""
+    return int(chunk) == 0 and not named_launch_mode()
+
+
 def _launch(n_chunks: Array, max_chunks: int, chunk: int, launch, acc, mode: str):
     """Run ``launch(start, size, acc) -> acc`` over lanes ``0 .. n_chunks * chunk - 1`` (start
     traced, size static) as ``mode`` says; returns (acc, chunks launched)."""
@@ -337,6 +343,6 @@ def shade_screen(
     or sample). With the auto chunk and no ``JAXRENDER_DISPATCH`` set: one ``shade_dense``
     launch over ``SCREEN_TIERS`` (one host read). With a chunk given, or a launch mode named in
     ``JAXRENDER_DISPATCH``: the chunked ``shade`` of its work list in that mode."""
-    if int(chunk) == 0 and not named_launch_mode():
+    if launches_once(chunk):
         return shade_dense(active, points_of, shade_fn, out, SCREEN_TIERS)
     return shade(WorkList.of(active), points_of, shade_fn, out, chunk)

@@ -152,9 +152,15 @@ def live_fragments(fr) -> Array:
 def shade_layers(scene, camera, fr, front, work, points_of, chunk: int):
     """Shade the ``front`` fragments listed in ``work`` (``front_work``). Returns (Layers,
     WorkList)."""
-    values = jnp.zeros((front.shape[0], LAYER_CHANNELS), jnp.float32)
-    values, work = dispatch.shade(work, points_of, layer_shader(scene, camera), values, chunk)
+    values, work = layer_values(scene, camera, front, work, points_of, chunk)
     return Layers(fr.pixel, fr.tri, fr.depth, front, values, live_fragments(fr)), work
+
+
+def layer_values(scene, camera, front: Array, work, points_of, chunk: int):
+    """``layer_shader``'s values float32[F, 5] of the fragments listed in ``work``, dispatched
+    in chunks (zero elsewhere). Returns (values, WorkList)."""
+    values = jnp.zeros((front.shape[0], LAYER_CHANNELS), jnp.float32)
+    return dispatch.shade(work, points_of, layer_shader(scene, camera), values, chunk)
 
 
 def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
@@ -169,7 +175,7 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
         clip = clip_vertices(scene, camera, cfg)
         with jax.named_scope("fragments"):
             fr = transparent_fragments(scene, clip, cfg)
-        if int(cfg.chunk) == 0 and not dispatch.named_launch_mode():
+        if dispatch.launches_once(cfg.chunk):
             # Its lanes are left out of the counts: they follow the list's capacity, which
             # like ``chunk`` must leave a frame's counts as they are (OUTPUT_NEUTRAL).
             out, counts, _ = blend_on_prefix(scene, camera, clip, fr, image.reshape(-1, 3),
@@ -213,9 +219,8 @@ def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Ar
 
         with jax.named_scope("layer_shading"):
             if pixel.shape[0] == shortest:
-                values = jnp.zeros((shortest, LAYER_CHANNELS), jnp.float32)
-                values, work = dispatch.shade(dispatch.WorkList.of(front), points_of, shader,
-                                              values)
+                values, work = layer_values(scene, camera, front, dispatch.WorkList.of(front),
+                                            points_of, 0)
                 lanes = work.lanes
             else:
                 points = points_of(jnp.arange(pixel.shape[0], dtype=jnp.int32))
@@ -370,7 +375,7 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
 
 
 __all__ = ["blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list",
-           "front_work", "in_front", "LAYER_BYTES",
+           "front_work", "in_front", "LAYER_BYTES", "layer_values",
            "layer_shader", "Layers", "live_fragments", "merge_counts",
            "refuse_transparency", "settings_of", "shade_layers",
            "sorted_composite", "transparent_fragments", "transparent_pass", "wboit_weight",
