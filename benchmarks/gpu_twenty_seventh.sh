@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Prepared in the twenty-seventh session (carry [".whl"]), one call:
+#   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes)
+# hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
+#   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
+#   intermediates the 26 kernels of room's shader store (443 bytes a point, about 0.5 ms of its
+#   1.2 at the H100's bandwidth, an estimate from sizes).
+# profile4: checkerboard and deferred on foliage as 8-frame sequences of a still camera
+#   (history carried): checkerboard is faster than deferred as one frame (1.80 against 2.16 ms
+#   a call) and slower in an 8-frame pan (1.78 against 1.61). Is it the temporal pass?
+# shader: deferred on room, the lighting pass's kernels (its shader in a pipeline).
+# refprof: the 64-sample reference on room (93 ms on an H100), kernels by scope: how much is
+#   its shading (64 x room's shader: about 77 ms at the rate above) and how much its passes.
+. "$(dirname "$0")/gpu_env.sh"
+for part in "$@"; do
+  if [ "$part" = hlo ]; then
+    mkdir -p /tmp/hlo
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 python3 benchmarks/bench_shade_parts.py \
+      --scenes room foliage glass --hlo /tmp/hlo --out "$OUT/shade_parts.jsonl" 2>&1 | quiet \
+      | tee -a "$OUT/shade_parts.md"
+    tar -czf "$OUT/hlo.tar.gz" -C /tmp hlo
+  elif [ "$part" = profile4 ]; then
+    for pipe in deferred checkerboard; do
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 70 python3 benchmarks/profile_kernels.py $pipe \
+        --scene foliage --top 12 --calls 3 --frames 8 --scope visibility --scope gbuffer \
+        --scope lighting --scope plan --scope shade --scope spatial --scope temporal 2>&1 \
+        | quiet | tee -a "$OUT/profile4.md"
+    done
+  elif [ "$part" = shader ]; then
+    prof deferred room 60 visibility gbuffer lighting shade lights texture
+  elif [ "$part" = refprof ]; then
+    prof reference room 120 raster shade transparent reconstruct lights texture
+  fi
+done
+exit 0
