@@ -75,6 +75,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="shade_parts.jsonl")
     ap.add_argument("--hlo", default="", help="a folder for each optimized program's text")
     ap.add_argument("--label", default="", help="a name for this tree in the rows")
+    ap.add_argument("--own-effects", action="store_true",
+                    help="only each scene's own effects (no part turned off)")
     a = ap.parse_args(argv)
     w, h = a.resolution
     print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)
@@ -86,7 +88,10 @@ def main(argv=None) -> int:
         camera = default_camera(base)
         pts = tuple(jnp.asarray(p) for p in covered_points(base, camera, w, h))
         n = int(pts[0].shape[0])
-        for label, change in variants(base.effects).items():
+        chosen = variants(base.effects)
+        if a.own_effects:
+            chosen = {"all on": chosen["all on"]}
+        for label, change in chosen.items():
             scene = dataclasses.replace(
                 base, effects=dataclasses.replace(base.effects, **change))
             fn = jax.jit(lambda s, c, p: shade(surface_points(s, c, *p), s))

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-seventh session (carry [".whl"]), one call:
-#   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes)
+#   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes; ran)
+#   bash benchmarks/gpu_twenty_seventh.sh soa   (carry .v too: .v/v26 is 71adbb1's jaxrender)
 # hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
 #   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
 #   intermediates the 26 kernels of room's shader store (443 bytes a point, about 0.5 ms of its
@@ -11,7 +12,14 @@
 # shader: deferred on room, the lighting pass's kernels (its shader in a pipeline).
 # refprof: the 64-sample reference on room (93 ms on an H100), kernels by scope: how much is
 #   its shading (64 x room's shader: about 77 ms at the rate above) and how much its passes.
+# soa: the shader's lights and its last stage on per-point components (vec.components: tuples
+#   of float32[N], not [N, 3] arrays), against v26. On [N, 3] each colour channel's kernel
+#   recomputed the per-point terms shared by the three channels, so XLA stored them: room's
+#   shader wrote 443 bytes a point between 26 kernels. Prediction: room's one launch 1.18 ->
+#   0.6-0.8 ms, fewer kernels; deferred and forward on room 0.3-0.5 ms faster; the reference
+#   on room (94.5 ms, 72 of them shading) 20-35 ms faster.
 . "$(dirname "$0")/gpu_env.sh"
+S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in "$@"; do
   if [ "$part" = hlo ]; then
     mkdir -p /tmp/hlo
@@ -19,6 +27,17 @@ for part in "$@"; do
       --scenes room foliage glass --hlo /tmp/hlo --out "$OUT/shade_parts.jsonl" 2>&1 | quiet \
       | tee -a "$OUT/shade_parts.md"
     tar -czf "$OUT/hlo.tar.gz" -C /tmp hlo
+  elif [ "$part" = soa ]; then
+    for t in v26 after; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 120 python3 benchmarks/bench_shade_parts.py \
+        --scenes room foliage glass spheres --own-effects --label $t \
+        --out "$OUT/soa_parts.jsonl" 2>&1 | quiet | tee -a "$OUT/soa.md"
+    done
+    side_by_side soa_seq 200 "v26 after" --scenes room foliage glass --pipelines deferred \
+      forward
+    S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
+    side_by_side soa_ref 150 "v26 after" --scenes room foliage --pipelines reference
   elif [ "$part" = profile4 ]; then
     for pipe in deferred checkerboard; do
       PYTHONPATH=$PWD:/tmp/site timeout -k 5 70 python3 benchmarks/profile_kernels.py $pipe \

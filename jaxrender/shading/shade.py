@@ -6,18 +6,17 @@ shadows traces no shadow lookup, one without textures no texture gather, and so 
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 
-from jaxrender.fusion import materialize, materialize_all, sum_small
+from jaxrender.fusion import materialize, materialize_all
 from jaxrender.scene.effects import BLINN_PHONG, GGX, PROC_STRIPES, Effects
 from jaxrender.scene.scene import Scene
 import jaxrender.shading.brdf as brdf
 from jaxrender.shading.shadow import shadow_factor
 from jaxrender.shading.texture import sample
-from jaxrender.shading.vec import cross, dot, safe_normalize
+from jaxrender.shading.vec import (components, cross, dot, dot3, normalize3,
+                                   safe_normalize)
 from jaxrender.types import Array, SurfacePoints
 
 LAYER_NUDGE = 1e-3  # radians; the spread of the shader-cost layers' normals
@@ -115,66 +114,78 @@ def _normal_map(points: SurfacePoints, scene: Scene, effects: Effects) -> tuple[
 
 
 @jax.named_scope("lights")
-def _incoming(points: SurfacePoints, scene: Scene, effects: Effects):
-    """(direction to each light l, its irradiance E, shadows included), float32[N, L, 3] each,
-    or None for a scene without lights: what the lobes need besides the shading normal."""
+def _incoming(points: SurfacePoints, scene: Scene, effects: Effects) -> list:
+    """Per light, directional lights first: (direction to the light, its irradiance E with
+    shadows), each a component tuple (``vec.components``) of float32[N] or scalars: what the
+    lobes need besides the shading normal. Empty for a scene without lights."""
     lt = scene.lights
-    pos, ng = points.position, points.normal
-    ls, es = [], []
-    if lt.dir_to_light.shape[0]:
-        ld = jnp.broadcast_to(lt.dir_to_light[None], (pos.shape[0],) + lt.dir_to_light.shape)
-        ed = jnp.broadcast_to(lt.dir_irradiance[None], ld.shape)
-        if effects.shadows:
+    out = []
+    for j in range(lt.dir_to_light.shape[0]):
+        e = components(lt.dir_irradiance[j])
+        if effects.shadows and j == 0:  # the shadow map is the first directional light's
             if scene.shadow is None:
                 raise ValueError(f"scene {scene.name!r}: effects.shadows is on but the scene has "
                                  "no shadow map; call jaxrender.shading.with_shadow_map(scene)")
-            vis = shadow_factor(scene.shadow, pos, ng, effects.shadow_bias)  # light 0 only
-            first = jnp.arange(lt.dir_to_light.shape[0]) == 0
-            ed = ed * jnp.where(first[None, :, None], vis[:, :, None], 1.0)
-        ls.append(ld)
-        es.append(ed)
-    if lt.point_position.shape[0]:
-        d = lt.point_position[None, :, :] - pos[:, None, :]  # [N, Lp, 3]
-        dist2 = jnp.maximum(dot(d, d), 1e-12)
-        ls.append(d / jnp.sqrt(dist2))
-        es.append(lt.point_intensity[None, :, :] / dist2)
-    if not ls:
-        return None
-    return jnp.concatenate(ls, axis=1), jnp.concatenate(es, axis=1)
+            vis = shadow_factor(scene.shadow, points.position, points.normal,
+                                effects.shadow_bias)[:, 0]
+            e = tuple(c * vis for c in e)
+        out.append((components(lt.dir_to_light[j]), e))
+    pos = components(points.position)
+    for j in range(lt.point_position.shape[0]):
+        d = tuple(q - p for q, p in zip(components(lt.point_position[j]), pos))
+        dist2 = jnp.maximum(dot3(d, d), 1e-12)
+        root = jnp.sqrt(dist2)
+        out.append((tuple(c / root for c in d),
+                    tuple(c / dist2 for c in components(lt.point_intensity[j]))))
+    return out
 
 
 @jax.named_scope("lights")
-def _light_sum(points: SurfacePoints, scene: Scene, effects: Effects, n: Array, albedo: Array,
-               spec_params, incoming) -> Array:
-    """Sum over all directional and point lights of f(l, v) E cos at shading normal n,
-    float32[N, 3], given ``_incoming``'s terms."""
-    if incoming is None:
-        return jnp.zeros_like(albedo)
-    l_dir, e = incoming
-    ng, v, mat = points.normal, points.view, points.material
-    n_l = n[:, None, :]
-    cos = dot(n_l, l_dir)  # [N, L, 1]
-    above = dot(ng[:, None, :], l_dir) > 0.0
-    cos_c = jnp.where(above, jnp.maximum(cos, 0.0), 0.0)
-    f = brdf.lambert(albedo)[:, None, :]
-    if effects.specular:
-        ks, shin, alpha_g = spec_params
-        kind = _gather(scene.materials.brdf, mat)[:, None, None]
-        h = safe_normalize(l_dir + v[:, None, :], n_l + 0.0 * l_dir)
-        n_h = dot(n_l, h)
-        if BLINN_PHONG in effects.brdfs:
-            bp = brdf.blinn_phong(ks[:, None, :], shin[:, None, :], n_h)
-            f = f + jnp.where(kind == BLINN_PHONG, bp, 0.0)
-        if GGX in effects.brdfs:
-            n_v = dot(n, v)[:, None, :]
-            v_h = dot(v[:, None, :], h)
-            g = brdf.ggx(ks[:, None, :], alpha_g[:, None, :], cos, n_v, n_h, v_h)
-            f = f + jnp.where(kind == GGX, g, 0.0)
-    return sum_small(f * e * cos_c, axis=1)
+def _light_sum(frame: tuple, scene: Scene, effects: Effects, n: tuple, albedo: tuple,
+               spec_params, incoming: list) -> tuple:
+    """Sum over all directional and point lights of f(l, v) E cos at shading normal ``n``, per
+    colour channel (a component tuple of float32[N]), given ``_incoming``'s terms; ``frame``
+    is (geometric normal, view direction, material), the first two component tuples."""
+    ng, v, mat = frame
+    total = None
+    for l_dir, e in incoming:
+        cos = dot3(n, l_dir)
+        cos_c = jnp.where(dot3(ng, l_dir) > 0.0, jnp.maximum(cos, 0.0), 0.0)
+        f = [brdf.lambert(a) for a in albedo]
+        if effects.specular:
+            ks, shin, alpha_g = spec_params
+            kind = _gather(scene.materials.brdf, mat)
+            h = normalize3(tuple(a + b for a, b in zip(l_dir, v)), n)
+            n_h = dot3(n, h)
+            if BLINN_PHONG in effects.brdfs:
+                f = [fc + jnp.where(kind == BLINN_PHONG, brdf.blinn_phong(k, shin, n_h), 0.0)
+                     for fc, k in zip(f, ks)]
+            if GGX in effects.brdfs:
+                n_v, v_h = dot3(n, v), dot3(v, h)
+                f = [fc + jnp.where(kind == GGX, brdf.ggx(k, alpha_g, cos, n_v, n_h, v_h), 0.0)
+                     for fc, k in zip(f, ks)]
+        terms = tuple(fc * ec * cos_c for fc, ec in zip(f, e))
+        total = terms if total is None else tuple(a + b for a, b in zip(total, terms))
+    if total is None:
+        return tuple(jnp.zeros_like(a) for a in albedo)
+    return total
 
 
-def layer_sum(layer, angles: Array, lanes: int) -> Array:
-    """sum_k layer(angles[k]) for a ``layer`` over ``lanes`` points: batched over the layers
+def _store(tree, n: int):
+    """``materialize_all`` of the float32[n] leaves of ``tree`` (scalars and integers stay as
+    they are)."""
+    leaves, treedef = jax.tree.flatten(tree)
+    points = [i for i, a in enumerate(leaves)
+              if jnp.shape(a) == (n,) and jnp.result_type(a) == jnp.float32]
+    stored = materialize_all(*(leaves[i] for i in points))
+    for i, a in zip(points, stored):
+        leaves[i] = a
+    return jax.tree.unflatten(treedef, leaves)
+
+
+def layer_sum(layer, angles: Array, lanes: int):
+    """sum_k layer(angles[k]) (an array, or a pytree of them, summed leaf by leaf) for a
+    ``layer`` over ``lanes`` points: batched over the layers
     (vmap), in blocks of as many layers as keep a block's evaluations within LAYER_LANES. All
     the layers in one block need no loop; more run in a ``fori_loop`` of whole blocks, whose
     iterations each read back to the host on a GPU (about 27 us) but evaluate over LAYER_LANES
@@ -182,18 +193,23 @@ def layer_sum(layer, angles: Array, lanes: int) -> Array:
     last whole block run after the loop."""
     n_layers = angles.shape[0]
     block = max(1, LAYER_LANES // max(int(lanes), 1))
+    def batch(some):  # the layers of ``some`` evaluated together and summed
+        return jax.tree.map(lambda x: jnp.sum(x, axis=0), jax.vmap(layer)(some))
+
+    def add(a, b):
+        return jax.tree.map(jnp.add, a, b)
+
     if n_layers <= block:
-        return jnp.sum(jax.vmap(layer)(angles), axis=0)
+        return batch(angles)
     n_blocks = n_layers // block
 
     def add_block(i, acc):
-        some = jax.lax.dynamic_slice_in_dim(angles, i * block, block)
-        return acc + jnp.sum(jax.vmap(layer)(some), axis=0)
+        return add(acc, batch(jax.lax.dynamic_slice_in_dim(angles, i * block, block)))
 
-    one = jax.eval_shape(layer, angles[0])
-    total = jax.lax.fori_loop(0, n_blocks, add_block, jnp.zeros(one.shape, one.dtype))
+    zeros = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), jax.eval_shape(layer, angles[0]))
+    total = jax.lax.fori_loop(0, n_blocks, add_block, zeros)
     if n_layers > n_blocks * block:
-        total = total + jnp.sum(jax.vmap(layer)(angles[n_blocks * block:]), axis=0)
+        total = add(total, batch(angles[n_blocks * block:]))
     return total
 
 
@@ -215,42 +231,42 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     spec_params = None
     if effects.specular:
         ks = _gather(m.specular, mat)
-        shin = _gather(m.shininess, mat)[:, None]
-        alpha_g = jnp.square(_gather(m.roughness, mat))[:, None]
-        spec_params = (ks, shin, alpha_g)
+        shin = _gather(m.shininess, mat)
+        alpha_g = jnp.square(_gather(m.roughness, mat))
+        spec_params = (components(ks), shin, alpha_g)
     if effects.normal_map:
         n, length = materialize_all(*_normal_map(points, scene, effects))
         if effects.toksvig and effects.specular:
-            spec_params = (ks, brdf.toksvig_shininess(shin, length),
-                           brdf.toksvig_roughness(alpha_g, length))
+            spec_params = (components(ks), brdf.toksvig_shininess(shin, length[:, 0]),
+                           brdf.toksvig_roughness(alpha_g, length[:, 0]))
+    # From here on every vector is a tuple of per-point components (``vec.components``).
+    n, albedo = components(n), components(albedo)
+    frame = (components(points.normal), components(points.view), mat)
     layers = 1 + effects.shader_cost
     if layers == 1:
-        direct = _light_sum(points, scene, effects, n, albedo, spec_params,
+        direct = _light_sum(frame, scene, effects, n, albedo, spec_params,
                             _incoming(points, scene, effects))
     else:
         # Shader-cost layers: the lights again with the normal nudged along the tangent by
         # a layer-dependent angle (< LAYER_NUDGE), so XLA cannot hoist or merge the layers.
-        t = safe_normalize(points.tangent[:, :3] - n * dot(n, points.tangent[:, :3]), n)
+        tangent = components(points.tangent)[:3]
+        t = normalize3(tuple(a - c * dot3(n, tangent) for a, c in zip(tangent, n)), n)
         angles = LAYER_NUDGE * ((jnp.arange(layers, dtype=jnp.float32) + 0.5) / layers - 0.5)
 
         # What every layer shares (the lights' directions and irradiance, the shadow lookups
         # among them, and the point's frame), computed and stored once: fused into the batched
         # layers, XLA computed it again for each layer.
         incoming = _incoming(points, scene, effects)
-        if incoming is not None:
-            l_dir, e = incoming
-            l_dir, e, n, t, albedo, ng, v = materialize_all(l_dir, e, n, t, albedo,
-                                                            points.normal, points.view)
-            incoming = (l_dir, e)
-            points = dataclasses.replace(points, normal=ng, view=v)
+        if incoming:
+            incoming, n, t, albedo, frame = _store((incoming, n, t, albedo, frame), mat.shape[0])
 
         def layer(ang):
-            n_i = safe_normalize(n + t * ang, n)
-            return _light_sum(points, scene, effects, n_i, albedo, spec_params, incoming)
+            n_i = normalize3(tuple(a + b * ang for a, b in zip(n, t)), n)
+            return _light_sum(frame, scene, effects, n_i, albedo, spec_params, incoming)
 
-        direct = layer_sum(layer, angles, n.shape[0]) / layers
-    rgb = direct + albedo * scene.lights.ambient[None, :]
+        direct = tuple(c / layers for c in layer_sum(layer, angles, mat.shape[0]))
+    rgb = [d + a * scene.lights.ambient[c] for c, (d, a) in enumerate(zip(direct, albedo))]
     if effects.emissive:
-        rgb = rgb + _gather(m.emissive, mat)
-    rgb = jnp.where(jnp.isfinite(rgb), rgb, 0.0)
-    return jnp.where(points.valid[:, None], rgb, 0.0)
+        rgb = [x + e for x, e in zip(rgb, components(_gather(m.emissive, mat)))]
+    rgb = [jnp.where(points.valid, jnp.where(jnp.isfinite(x), x, 0.0), 0.0) for x in rgb]
+    return jnp.stack(rgb, axis=-1)
