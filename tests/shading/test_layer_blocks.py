@@ -46,9 +46,11 @@ def _shade_program(scene, pts):
 
 
 def test_a_costly_launch_shades_the_same_in_blocks_with_bounded_temporaries(monkeypatch):
-    # 512 covered-or-not points of the foliage scene at shader cost 255 (256 layers): one
-    # batch of 131,072 layer-lanes against blocks of 4 layers (2,048 layer-lanes).
-    scene = with_shader_cost(load_lit_scene("foliage"), 255)
+    # 512 covered-or-not points of the foliage scene at shader cost 1023 (1024 layers): one
+    # batch of 524,288 layer-lanes against blocks of 4 layers (2,048 layer-lanes). Foliage's
+    # layers store about 4 bytes a layer-lane on a CPU, beside the shared terms the blocks
+    # store too, so it takes this many layers for the batch's temporaries to dwarf those.
+    scene = with_shader_cost(load_lit_scene("foliage"), 1023)
     rng = np.random.default_rng(11)
     n = 512
     tri = rng.integers(-1, scene.faces.shape[0], n).astype(np.int32)
