@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-seventh session (carry [".whl"]), one call:
 #   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes; ran)
-#   bash benchmarks/gpu_twenty_seventh.sh soa   (carry .v too: .v/v26 is 71adbb1's jaxrender)
+#   bash benchmarks/gpu_twenty_seventh.sh soa planhlo  (carry .v too: .v/v26 is 71adbb1's jaxrender)
 # hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
 #   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
 #   intermediates the 26 kernels of room's shader store (443 bytes a point, about 0.5 ms of its
@@ -12,6 +12,8 @@
 # shader: deferred on room, the lighting pass's kernels (its shader in a pipeline).
 # refprof: the 64-sample reference on room (93 ms on an H100), kernels by scope: how much is
 #   its shading (64 x room's shader: about 77 ms at the rate above) and how much its passes.
+# planhlo: checkerboard's optimized programs on foliage (8-frame sequence), for its plan's
+#   0.13 ms kernel (input_add_and_compare_reduce_select_fusion, profile4).
 # soa: the shader's lights and its last stage on per-point components (vec.components: tuples
 #   of float32[N], not [N, 3] arrays), against v26. On [N, 3] each colour channel's kernel
 #   recomputed the per-point terms shared by the three channels, so XLA stored them: room's
@@ -38,6 +40,12 @@ for part in "$@"; do
       forward
     S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
     side_by_side soa_ref 150 "v26 after" --scenes room foliage --pipelines reference
+  elif [ "$part" = planhlo ]; then
+    XLA_FLAGS="--xla_dump_to=/tmp/dump --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
+      timeout -k 5 90 python3 benchmarks/profile_kernels.py checkerboard --scene foliage \
+      --top 8 --calls 1 --frames 8 2>&1 | quiet | tee -a "$OUT/planhlo.md"
+    (cd /tmp/dump && ls -S | head -20 >> "$OUT/planhlo.md"; \
+      tar -czf "$OUT/dump.tar.gz" $(ls | grep after_optimizations.txt))
   elif [ "$part" = profile4 ]; then
     for pipe in deferred checkerboard; do
       PYTHONPATH=$PWD:/tmp/site timeout -k 5 70 python3 benchmarks/profile_kernels.py $pipe \
