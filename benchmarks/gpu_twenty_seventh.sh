@@ -19,7 +19,9 @@
 #   recomputed the per-point terms shared by the three channels, so XLA stored them: room's
 #   shader wrote 443 bytes a point between 26 kernels. Prediction: room's one launch 1.18 ->
 #   0.6-0.8 ms, fewer kernels; deferred and forward on room 0.3-0.5 ms faster; the reference
-#   on room (94.5 ms, 72 of them shading) 20-35 ms faster.
+#   on room (94.5 ms, 72 of them shading) 20-35 ms faster. Three trees: v26, soa1 (the lights
+#   on components) and this tree (the surface points too: the reference's and forward's
+#   shading computes them; deferred's G-buffer pass does).
 . "$(dirname "$0")/gpu_env.sh"
 S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in "$@"; do
@@ -30,16 +32,16 @@ for part in "$@"; do
       | tee -a "$OUT/shade_parts.md"
     tar -czf "$OUT/hlo.tar.gz" -C /tmp hlo
   elif [ "$part" = soa ]; then
-    for t in v26 after; do
+    for t in v26 soa1 after; do
       if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
       PYTHONPATH=$R:/tmp/site timeout -k 5 120 python3 benchmarks/bench_shade_parts.py \
         --scenes room foliage glass spheres --own-effects --label $t \
         --out "$OUT/soa_parts.jsonl" 2>&1 | quiet | tee -a "$OUT/soa.md"
     done
-    side_by_side soa_seq 200 "v26 after" --scenes room foliage glass --pipelines deferred \
+    side_by_side soa_seq 200 "v26 soa1 after" --scenes room foliage glass --pipelines deferred \
       forward
     S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
-    side_by_side soa_ref 150 "v26 after" --scenes room foliage --pipelines reference
+    side_by_side soa_ref 150 "v26 soa1 after" --scenes room foliage --pipelines reference
   elif [ "$part" = planhlo ]; then
     XLA_FLAGS="--xla_dump_to=/tmp/dump --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
       timeout -k 5 90 python3 benchmarks/profile_kernels.py checkerboard --scene foliage \

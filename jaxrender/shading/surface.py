@@ -5,16 +5,19 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrender.fusion import all_small, sum_small
+from jaxrender.fusion import all_small
 from jaxrender.scene.camera import Camera
 from jaxrender.scene.scene import Scene
-from jaxrender.shading.vec import cross, dot, safe_normalize
+from jaxrender.shading.vec import components, cross3, dot, dot3, normalize3, stack
 from jaxrender.types import Array, SurfacePoints
 
 
-def _interp(w: Array, attr: Array) -> Array:
-    """w float32[N, 3], attr [N, 3, C] -> [N, C]."""
-    return sum_small(w[:, :, None] * attr, axis=1)
+def _interp(w: tuple, attr: Array, corners: list) -> tuple:
+    """Barycentric weights (w0, w1, w2) of float32[N], vertex attribute [V, C], the triangles'
+    vertex indices per corner -> the interpolated attribute as C components of float32[N]."""
+    rows = [attr[c] for c in corners]  # [N, C] per corner
+    return tuple(w[0] * rows[0][:, i] + w[1] * rows[1][:, i] + w[2] * rows[2][:, i]
+                 for i in range(attr.shape[1]))
 
 
 @jax.named_scope("surface_points")
@@ -27,39 +30,43 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
     the chain rule, duv/dx = sum_i dbary_i/dx * uv_i. The geometric normal (of the triangle) and
     the interpolated normal are flipped together when the triangle is seen from behind. Invalid
     points (tri_id < 0 or non-finite barycentrics) come back with valid False and finite values.
+    Computed on per-point components (``vec.components``), as the shader is.
     """
     tri_id = jnp.asarray(tri_id, jnp.int32)
     valid = (tri_id >= 0) & (tri_id < scene.faces.shape[0])
     valid = valid & all_small(jnp.isfinite(bary))
     vcol = valid[:, None]
-    bary = jnp.where(vcol, bary, jnp.float32(1.0 / 3.0))
-    dbary_dx = jnp.where(vcol & jnp.isfinite(dbary_dx), dbary_dx, 0.0)
-    dbary_dy = jnp.where(vcol & jnp.isfinite(dbary_dy), dbary_dy, 0.0)
+    w = components(jnp.where(vcol, bary, jnp.float32(1.0 / 3.0)))
+    w_dx = components(jnp.where(vcol & jnp.isfinite(dbary_dx), dbary_dx, 0.0))
+    w_dy = components(jnp.where(vcol & jnp.isfinite(dbary_dy), dbary_dy, 0.0))
     t = jnp.where(valid, tri_id, 0)
-    f = scene.faces[t]  # [N, 3]
-    p = scene.positions[f]  # [N, 3, 3]
-    pos = _interp(bary, p)
-    z = jnp.zeros_like(pos)
-    up = z + jnp.asarray([0.0, 0.0, 1.0], jnp.float32)[None, :]
-    n_interp = _interp(bary, scene.normals[f])
-    n_geo = safe_normalize(cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), safe_normalize(n_interp, up))
-    n_shade = safe_normalize(n_interp, n_geo)
-    view = safe_normalize(camera.eye[None, :] - pos, n_geo)
-    flip = dot(n_geo, view) < 0.0
-    sign = jnp.where(flip, jnp.float32(-1.0), jnp.float32(1.0))
-    n_geo, n_shade = n_geo * sign, n_shade * sign
-    tan_v = scene.tangents[f]
-    tangent = jnp.concatenate([_interp(bary, tan_v[:, :, :3]), tan_v[:, 0, 3:4]], axis=-1)
-    uv_v = scene.uvs[f]
+    corners = list(components(scene.faces[t]))
+    p = [components(scene.positions[c]) for c in corners]
+    pos = _interp(w, scene.positions, corners)
+    up = (jnp.float32(0.0), jnp.float32(0.0), jnp.float32(1.0))
+    n_interp = _interp(w, scene.normals, corners)
+    edge1 = tuple(b - a for a, b in zip(p[0], p[1]))
+    edge2 = tuple(b - a for a, b in zip(p[0], p[2]))
+    n_geo = normalize3(cross3(edge1, edge2), normalize3(n_interp, up))
+    n_shade = normalize3(n_interp, n_geo)
+    view = normalize3(tuple(e - q for e, q in zip(components(camera.eye), pos)), n_geo)
+    sign = jnp.where(dot3(n_geo, view) < 0.0, jnp.float32(-1.0), jnp.float32(1.0))
+    n_geo, n_shade = tuple(c * sign for c in n_geo), tuple(c * sign for c in n_shade)
+    tangent = _interp(w, scene.tangents[:, :3], corners) + (scene.tangents[corners[0], 3],)
+
+    def kept(v: tuple, fallback: tuple) -> Array:  # the point's value, or fallback if invalid
+        return stack(tuple(jnp.where(valid, c, f) for c, f in zip(v, fallback)))
+
+    zero, one = jnp.float32(0.0), jnp.float32(1.0)
     return SurfacePoints(
-        position=jnp.where(vcol, pos, 0.0),
-        normal=jnp.where(vcol, n_geo, up),
-        shading_normal=jnp.where(vcol, n_shade, up),
-        tangent=jnp.where(vcol, tangent, jnp.asarray([1.0, 0.0, 0.0, 1.0], jnp.float32)[None, :]),
-        uv=_interp(bary, uv_v) * vcol.astype(jnp.float32),
-        duv_dx=_interp(dbary_dx, uv_v),
-        duv_dy=_interp(dbary_dy, uv_v),
-        view=jnp.where(vcol, view, up),
+        position=kept(pos, (zero, zero, zero)),
+        normal=kept(n_geo, up),
+        shading_normal=kept(n_shade, up),
+        tangent=kept(tangent, (one, zero, zero, one)),
+        uv=stack(tuple(c * valid.astype(jnp.float32) for c in _interp(w, scene.uvs, corners))),
+        duv_dx=stack(_interp(w_dx, scene.uvs, corners)),
+        duv_dy=stack(_interp(w_dy, scene.uvs, corners)),
+        view=kept(view, up),
         material=jnp.where(valid, scene.tri_material[t], 0),
         tri_id=jnp.where(valid, tri_id, -1),
         valid=valid,

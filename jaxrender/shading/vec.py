@@ -49,3 +49,13 @@ def normalize3(v: tuple, fallback: tuple) -> tuple:
     ok = (n2 > TINY) & jnp.isfinite(n2)
     inv = jnp.where(ok, 1.0 / jnp.sqrt(jnp.where(ok, n2, 1.0)), 0.0)
     return tuple(jnp.where(ok, c * inv, f) for c, f in zip(v, fallback))
+
+
+def cross3(a: tuple, b: tuple) -> tuple:
+    """a x b of component tuples (as ``jnp.cross``)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def stack(v: tuple) -> Array:
+    """A component tuple of float32[N] as one float32[N, C] array."""
+    return jnp.stack(v, axis=-1)
