@@ -34,14 +34,14 @@ for part in "$@"; do
   elif [ "$part" = soa ]; then
     for t in v26 soa1 after; do
       if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-      PYTHONPATH=$R:/tmp/site timeout -k 5 120 python3 benchmarks/bench_shade_parts.py \
+      PYTHONPATH=$R:/tmp/site timeout -k 5 90 python3 benchmarks/bench_shade_parts.py \
         --scenes room foliage glass spheres --own-effects --label $t \
         --out "$OUT/soa_parts.jsonl" 2>&1 | quiet | tee -a "$OUT/soa.md"
     done
-    side_by_side soa_seq 200 "v26 soa1 after" --scenes room foliage glass --pipelines deferred \
+    side_by_side soa_seq 130 "v26 soa1 after" --scenes room glass --pipelines deferred \
       forward
     S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
-    side_by_side soa_ref 150 "v26 soa1 after" --scenes room foliage --pipelines reference
+    side_by_side soa_ref 100 "v26 soa1 after" --scenes room --pipelines reference
   elif [ "$part" = planhlo ]; then
     XLA_FLAGS="--xla_dump_to=/tmp/dump --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
       timeout -k 5 90 python3 benchmarks/profile_kernels.py checkerboard --scene foliage \
