@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-seventh session (carry [".whl"]), one call:
 #   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes; ran)
+#   bash benchmarks/gpu_twenty_seventh.sh final   (right after, on the warm machine)
 #   bash benchmarks/gpu_twenty_seventh.sh soa planhlo  (carry .v too: .v/v26 is 71adbb1's jaxrender)
 # hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
 #   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
@@ -12,6 +13,8 @@
 # shader: deferred on room, the lighting pass's kernels (its shader in a pipeline).
 # refprof: the 64-sample reference on room (93 ms on an H100), kernels by scope: how much is
 #   its shading (64 x room's shader: about 77 ms at the rate above) and how much its passes.
+# final: this tree's pipelines on room, glass and foliage (8-frame pans, images only): glass's
+#   six rows and forward on room were the seven over 3 ms.
 # planhlo: checkerboard's optimized programs on foliage (8-frame sequence), for its plan's
 #   0.13 ms kernel (input_add_and_compare_reduce_select_fusion, profile4).
 # soa: the shader's lights and its last stage on per-point components (vec.components: tuples
@@ -42,6 +45,10 @@ for part in "$@"; do
       forward
     S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
     side_by_side soa_ref 100 "v26 soa1 after" --scenes room --pipelines reference
+  elif [ "$part" = final ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 400 $S --scenes room glass foliage --pipelines \
+      deferred forward checkerboard dacs visbuffer object_space tads --json "$OUT/final.json" \
+      2>&1 | quiet | grep '^|' | tee -a "$OUT/final.md"
   elif [ "$part" = planhlo ]; then
     XLA_FLAGS="--xla_dump_to=/tmp/dump --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
       timeout -k 5 90 python3 benchmarks/profile_kernels.py checkerboard --scene foliage \
