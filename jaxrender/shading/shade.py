@@ -15,8 +15,7 @@ from jaxrender.scene.scene import Scene
 import jaxrender.shading.brdf as brdf
 from jaxrender.shading.shadow import shadow_factor
 from jaxrender.shading.texture import sample
-from jaxrender.shading.vec import (components, cross, dot, dot3, normalize3,
-                                   safe_normalize)
+from jaxrender.shading.vec import components, cross3, dot3, normalize3, stack
 from jaxrender.types import Array, SurfacePoints
 
 LAYER_NUDGE = 1e-3  # radians; the spread of the shader-cost layers' normals
@@ -98,19 +97,24 @@ def alpha_test(points: SurfacePoints, scene: Scene, effects: Effects | None = No
 
 def _normal_map(points: SurfacePoints, scene: Scene, effects: Effects) -> tuple[Array, Array]:
     """Shading normal after the normal map [N, 3] and the filtered normal length [N, 1]."""
-    n = points.shading_normal
+    n = components(points.shading_normal)
     nid = _gather(scene.materials.normal_map, points.material)
     texel = sample(scene.textures, nid, points.uv, points.duv_dx, points.duv_dy, effects.aniso_taps)
-    nt = texel[:, :3] * 2.0 - 1.0  # tangent space, shortened by filtering
-    length = jnp.sqrt(dot(nt, nt))
-    helper = jnp.where(jnp.abs(n[:, 0:1]) < 0.9, jnp.asarray([[1.0, 0.0, 0.0]]),
-                       jnp.asarray([[0.0, 1.0, 0.0]]))
-    t = points.tangent[:, :3]
-    t = safe_normalize(t - n * dot(n, t), safe_normalize(cross(n, helper), helper))
-    b = cross(n, t) * jnp.where(points.tangent[:, 3:4] < 0.0, -1.0, 1.0)
-    mapped = safe_normalize(nt[:, 0:1] * t + nt[:, 1:2] * b + nt[:, 2:3] * n, n)
-    has = (nid >= 0)[:, None]
-    return jnp.where(has, mapped, n), jnp.where(has, jnp.clip(length, 0.0, 1.0), 1.0)
+    nt = tuple(texel[:, i] * 2.0 - 1.0 for i in range(3))  # tangent space, shortened by filtering
+    length = jnp.sqrt(dot3(nt, nt))
+    one, zero = jnp.float32(1.0), jnp.float32(0.0)
+    x_helper = jnp.abs(n[0]) < 0.9
+    helper = (jnp.where(x_helper, one, zero), jnp.where(x_helper, zero, one), zero)
+    t = components(points.tangent)[:3]
+    t = normalize3(tuple(a - c * dot3(n, t) for a, c in zip(t, n)),
+                   normalize3(cross3(n, helper), helper))
+    sign = jnp.where(points.tangent[:, 3] < 0.0, -1.0, 1.0)
+    b = tuple(c * sign for c in cross3(n, t))
+    mapped = normalize3(tuple(nt[0] * tc + nt[1] * bc + nt[2] * nc
+                              for tc, bc, nc in zip(t, b, n)), n)
+    has = nid >= 0
+    return (stack(tuple(jnp.where(has, m, c) for m, c in zip(mapped, n))),
+            jnp.where(has, jnp.clip(length, 0.0, 1.0), 1.0)[:, None])
 
 
 @jax.named_scope("lights")
