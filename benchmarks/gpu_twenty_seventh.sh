@@ -24,7 +24,7 @@
 #   0.6-0.8 ms, fewer kernels; deferred and forward on room 0.3-0.5 ms faster; the reference
 #   on room (94.5 ms, 72 of them shading) 20-35 ms faster. Three trees: v26, soa1 (the lights
 #   on components) and this tree (the surface points too: the reference's and forward's
-#   shading computes them; deferred's G-buffer pass does).
+#   shading computes them; deferred's G-buffer pass does) and the normal map.
 . "$(dirname "$0")/gpu_env.sh"
 S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in "$@"; do
