@@ -89,27 +89,58 @@ def _sub_jaxprs(params):
                 yield inner
 
 
-def test_the_shader_reduces_over_no_short_axis():
-    """Every effect of the room (textures, normal map, both BRDFs, shadows, three lights): a
-    reduce over a size-3 axis would cut the shader into a kernel there."""
-    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
-    n = 16
-    rng = np.random.default_rng(9)
+def _room_points(n: int, seed: int) -> SurfacePoints:
+    rng = np.random.default_rng(seed)
 
     def unit(k):
         v = rng.normal(size=(n, k)).astype(np.float32)
         return jnp.asarray(v / np.linalg.norm(v, axis=1, keepdims=True))
 
-    pts = SurfacePoints(
+    return SurfacePoints(
         position=jnp.asarray(rng.normal(size=(n, 3)), jnp.float32), normal=unit(3),
         shading_normal=unit(3), tangent=jnp.concatenate([unit(3), jnp.ones((n, 1))], 1),
         uv=jnp.asarray(rng.random((n, 2)), jnp.float32),
         duv_dx=jnp.full((n, 2), 1e-3), duv_dy=jnp.full((n, 2), 1e-3), view=unit(3),
         material=jnp.asarray(rng.integers(0, 5, n), jnp.int32),
         tri_id=jnp.zeros((n,), jnp.int32), valid=jnp.ones((n,), bool))
-    closed = jax.make_jaxpr(lambda p: shade(p, scene))(pts)
+
+
+def test_the_shader_reduces_over_no_short_axis():
+    """Every effect of the room (textures, normal map, both BRDFs, shadows, three lights): a
+    reduce over a size-3 axis would cut the shader into a kernel there."""
+    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
+    closed = jax.make_jaxpr(lambda p: shade(p, scene))(_room_points(16, 9))
     found = _short_reductions(closed.jaxpr, [])
     assert not found, f"shade() reduces over short axes: {found}"
+
+
+# Views and lookups of a point's rows; anything else is arithmetic.
+NOT_ARITHMETIC = ("slice", "squeeze", "broadcast_in_dim", "reshape", "gather", "pjit", "jit")
+
+
+def _wide_arithmetic(jaxpr, scope: str, skip: str, found):
+    """Equations under named scope ``scope`` (not under ``skip``) computing arrays of more than
+    one axis."""
+    for eqn in jaxpr.eqns:
+        stack = str(eqn.source_info.name_stack)
+        if (scope in stack.split("/") and skip not in stack
+                and eqn.primitive.name not in NOT_ARITHMETIC
+                and any(len(v.aval.shape) > 1 for v in eqn.outvars)):
+            found.append((stack, eqn.primitive.name, [v.aval.shape for v in eqn.outvars]))
+        for sub in _sub_jaxprs(eqn.params):
+            _wide_arithmetic(sub, scope, skip, found)
+    return found
+
+
+def test_the_lights_compute_one_value_a_point():
+    """The lights' terms are per-point components (``vec.components``): arithmetic on an
+    [N, 3] or [N, L, 3] array there makes each colour channel's kernel recompute the terms the
+    three channels share, and XLA stores them between kernels instead (room's shader wrote 443
+    bytes a point). The shadow lookup's light-space transform is exempt: it is one matrix."""
+    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
+    closed = jax.make_jaxpr(lambda p: shade(p, scene))(_room_points(16, 9))
+    found = _wide_arithmetic(closed.jaxpr, "lights", "shadow_lookup", [])
+    assert not found, f"the lights compute on arrays of several axes: {found[:5]}"
 
 
 def test_pair_barycentrics_reduce_over_no_short_axis():
