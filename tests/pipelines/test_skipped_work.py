@@ -30,13 +30,13 @@ def _counted(monkeypatch):
     calls: list = []
     layer = getattr(shade_module, "_light_sum")
 
-    def counting(points, scene, effects, normal, *args):
+    def counting(frame, scene, effects, normal, *args):
         # The normal is the one argument that differs between the shader-cost layers (batched
         # over them): passing one of its values makes the callback run once per layer.
         jax.debug.callback(lambda lanes, live, _: calls.append((int(lanes), int(live))),
-                           points.valid.shape[0], jnp.sum(points.valid, dtype=jnp.int32),
-                           normal[0, 0])
-        return layer(points, scene, effects, normal, *args)
+                           frame.valid.shape[0], jnp.sum(frame.valid, dtype=jnp.int32),
+                           normal[0][0])
+        return layer(frame, scene, effects, normal, *args)
 
     monkeypatch.setattr(shade_module, "_light_sum", counting)
     return calls
