@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-seventh session (carry [".whl"]), one call:
 #   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes; ran)
-#   bash benchmarks/gpu_twenty_seventh.sh final   (right after, on the warm machine)
-#   bash benchmarks/gpu_twenty_seventh.sh soa planhlo  (carry .v too: .v/v26 is 71adbb1's jaxrender)
+#   bash benchmarks/gpu_twenty_seventh.sh final   (right after, on the warm machine; ran)
+#   bash benchmarks/gpu_twenty_seventh.sh texel   (carry .v: .v/soa1 and .v/full)
+#   bash benchmarks/gpu_twenty_seventh.sh soa  (ran; planhlo not run)  (carry .v too: .v/v26 is 71adbb1's jaxrender)
 # hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
 #   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
 #   intermediates the 26 kernels of room's shader store (443 bytes a point, about 0.5 ms of its
@@ -13,6 +14,11 @@
 # shader: deferred on room, the lighting pass's kernels (its shader in a pipeline).
 # refprof: the 64-sample reference on room (93 ms on an H100), kernels by scope: how much is
 #   its shading (64 x room's shader: about 77 ms at the rate above) and how much its passes.
+# texel: the normal map on components (.v/full, the soa call's "after") made the reference on
+#   room slower than the lights alone (.v/soa1): 89.2 against 74.6 ms, one 33.8 ms kernel, the
+#   texture filtering 4.4 ms against 1.3: each of the normal map's four stored values filtered
+#   the normal map again. This tree stores the texel first. Prediction: the reference at or
+#   below soa1's 74.6 ms; room's one launch and deferred as full's (0.785 and 1.558 ms).
 # final: this tree's pipelines on room, glass and foliage (8-frame pans, images only): glass's
 #   six rows and forward on room were the seven over 3 ms.
 # planhlo: checkerboard's optimized programs on foliage (8-frame sequence), for its plan's
@@ -49,6 +55,16 @@ for part in "$@"; do
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 400 $S --scenes room glass foliage --pipelines \
       deferred forward checkerboard dacs visbuffer object_space tads --json "$OUT/final.json" \
       2>&1 | quiet | grep '^|' | tee -a "$OUT/final.md"
+  elif [ "$part" = texel ]; then
+    for t in soa1 full after; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 60 python3 benchmarks/bench_shade_parts.py \
+        --scenes room --own-effects --label $t --out "$OUT/texel_parts.jsonl" 2>&1 | quiet \
+        | tee -a "$OUT/texel.md"
+    done
+    side_by_side texel_seq 60 "soa1 full after" --scenes room --pipelines deferred forward
+    S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
+    side_by_side texel_ref 60 "soa1 full after" --scenes room --pipelines reference
   elif [ "$part" = planhlo ]; then
     XLA_FLAGS="--xla_dump_to=/tmp/dump --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
       timeout -k 5 90 python3 benchmarks/profile_kernels.py checkerboard --scene foliage \
