@@ -7,7 +7,9 @@ interpolation over a triangle's corners) therefore runs as dozens of kernels, ea
 [N, 3] results; written as adds, its stages fuse, but a value read by several consumers is
 computed again in each, and through a chain of normalisations that costs exponentially in the
 chain's depth. The shader uses both tools below: adds inside a stage, and an explicit store
-between stages (the surface point, the mapped normal, the textured albedo).
+between stages (the mapped normal and its texel, the textured albedo, the shader-cost layers'
+shared terms). A third is in ``shading.vec``: per-point component tuples, so that no kernel
+writes an [N, 3] array whose three channels each recompute the terms they share.
 """
 
 from __future__ import annotations
