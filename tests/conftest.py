@@ -61,20 +61,36 @@ def _compiled_programs_released():
     memory_maps.release_if_crowded()
 
 
-# The files that take longest on the 2-core CI machine (pytest --durations=0, 2026-12-06,
-# per-file sums), handed to the xdist workers first: with --dist loadfile a file runs whole on
-# one worker, and a long file dispatched last (test_installed.py, minutes of subprocess
-# compiles, once; test_reference.py and test_transparency.py were not listed at all) leaves the
-# other worker idle at the end of the run.
+# The files that take longest on the 2-core CI machine (pytest --durations=0, per-file sums,
+# 2026-12-06; seconds of that run, on a shared machine whose load doubled the first files'
+# times), handed to the xdist workers first: with --dist loadfile a file runs whole on one
+# worker, and a long file dispatched last leaves the other worker idle at the end of the run.
+# Files of 30-50 s that were not listed (test_render.py, test_donate.py, test_tads.py) went
+# out in collection order, after many short ones; test_micro_batch.py (19 s) left the list.
 LONGEST_FIRST = (
-    "tests/test_installed.py", "tests/pipelines/test_reference.py",
-    "tests/pipelines/test_transparency.py", "tests/study/test_sequences.py",
-    "tests/study/test_time_study.py", "tests/raster/test_multi_sample.py",
-    "tests/pipelines/test_forward.py", "tests/pipelines/test_transparent_prefix.py",
-    "tests/raster/test_spans.py", "tests/study/test_runner.py",
-    "tests/pipelines/test_waves_and_worklists.py", "tests/pipelines/test_taa.py",
-    "tests/pipelines/test_vertex_work.py", "tests/pipelines/test_visbuffer.py",
-    "tests/pipelines/test_object_space.py", "tests/pipelines/test_micro_batch.py",
+    "tests/test_installed.py",  # 376 s: the README example in a fresh interpreter, a wheel
+    "tests/pipelines/test_transparency.py",  # 300
+    "tests/pipelines/test_reference.py",  # 284
+    "tests/study/test_sequences.py",  # 116
+    "tests/study/test_time_study.py",  # 81
+    "tests/raster/test_spans.py",  # 74
+    "tests/pipelines/test_forward.py",  # 68
+    "tests/raster/test_multi_sample.py",  # 68
+    "tests/study/test_runner.py",  # 66
+    "tests/shading/test_render.py",  # 50
+    "tests/pipelines/test_vertex_work.py",  # 49
+    "tests/pipelines/test_taa.py",  # 42
+    "tests/pipelines/test_object_space.py",  # 40
+    "tests/pipelines/test_visbuffer.py",  # 38
+    "tests/raster/test_donate.py",  # 37
+    "tests/pipelines/test_transparent_prefix.py",  # 37
+    "tests/pipelines/test_tads.py",  # 35
+    "tests/pipelines/test_dacs.py",  # 33
+    "tests/pipelines/test_checkerboard.py",  # 30
+    "tests/pipelines/test_mitsuba.py",  # 28
+    "tests/pipelines/test_waves_and_worklists.py",  # 27
+    "tests/raster/test_robust.py",  # 26
+    "tests/pipelines/test_os_budget.py",  # 25
 )
 
 
