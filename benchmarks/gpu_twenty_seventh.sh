@@ -2,7 +2,8 @@
 # Prepared in the twenty-seventh session (carry [".whl"]), one call:
 #   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes; ran)
 #   bash benchmarks/gpu_twenty_seventh.sh final   (right after, on the warm machine; ran)
-#   bash benchmarks/gpu_twenty_seventh.sh texel   (carry .v: .v/soa1 and .v/full)
+#   bash benchmarks/gpu_twenty_seventh.sh texel   (carry .v: .v/soa1 and .v/full; ran)
+#   bash benchmarks/gpu_twenty_seventh.sh fits    (with the device time left)
 #   bash benchmarks/gpu_twenty_seventh.sh soa  (ran; planhlo not run)  (carry .v too: .v/v26 is 71adbb1's jaxrender)
 # hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
 #   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
@@ -21,6 +22,9 @@
 #   below soa1's 74.6 ms; room's one launch and deferred as full's (0.785 and 1.558 ms).
 # final: this tree's pipelines on room, glass and foliage (8-frame pans, images only): glass's
 #   six rows and forward on room were the seven over 3 ms.
+# fits: foliage at costs 0 and 256 after the change (the layers now fuse: on a CPU foliage's
+#   store 4 bytes a layer-lane, not 20). Slopes against deferred's were DACS 0.97x,
+#   checkerboard 0.77x, the visibility buffer 0.74x.
 # planhlo: checkerboard's optimized programs on foliage (8-frame sequence), for its plan's
 #   0.13 ms kernel (input_add_and_compare_reduce_select_fusion, profile4).
 # soa: the shader's lights and its last stage on per-point components (vec.components: tuples
@@ -65,6 +69,11 @@ for part in "$@"; do
     side_by_side texel_seq 60 "soa1 full after" --scenes room --pipelines deferred forward
     S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
     side_by_side texel_ref 60 "soa1 full after" --scenes room --pipelines reference
+  elif [ "$part" = fits ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines deferred checkerboard dacs visbuffer --costs 0 256 \
+      --frames 8 --repeats 5 --budget 170 --out "$OUT/fits.jsonl" 2>&1 | quiet \
+      | grep -v '^{' | tee -a "$OUT/fits.md"
   elif [ "$part" = planhlo ]; then
     XLA_FLAGS="--xla_dump_to=/tmp/dump --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
       timeout -k 5 90 python3 benchmarks/profile_kernels.py checkerboard --scene foliage \
