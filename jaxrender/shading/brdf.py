@@ -1,6 +1,7 @@
-"""BRDF lobes. All take unit vectors [N, 3] (or cosines [N, 1]) and return [N, C] values of
-f(l, v) (the cosine factor is applied by the caller). Every lobe is finite for any exponent or
-roughness, including grazing and back-facing directions."""
+"""BRDF lobes. All are elementwise: they take the cosines and per-point parameters (float32[N]
+arrays or scalars; the shader passes one colour channel of ``ks`` at a time) and return values
+of f(l, v) of their broadcast shape (the cosine factor is applied by the caller). Every lobe
+is finite for any exponent or roughness, including grazing and back-facing directions."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ def lambert(albedo: Array) -> Array:
 
 
 def blinn_phong(ks: Array, shininess: Array, n_dot_h: Array) -> Array:
-    """Energy-normalised Blinn-Phong, ks (n + 8) / (8 pi) cos(theta_h)^n. shininess [N, 1].
+    """Energy-normalised Blinn-Phong, ks (n + 8) / (8 pi) cos(theta_h)^n.
 
     The power is exp(n log(cos)) with cos clamped away from 0, so n = 1e6 gives 0 off the peak
     and (n + 8) / (8 pi) at it: finite, never inf * 0."""
@@ -42,7 +43,7 @@ def toksvig_roughness(alpha: Array, normal_length: Array) -> Array:
 def ggx(f0: Array, alpha: Array, n_dot_l: Array, n_dot_v: Array, n_dot_h: Array,
         v_dot_h: Array) -> Array:
     """Cook-Torrance with the GGX distribution, height-correlated Smith visibility and Schlick
-    Fresnel. alpha = roughness^2, [N, 1]."""
+    Fresnel. alpha = roughness^2."""
     a2 = jnp.square(jnp.maximum(alpha, 1e-3))
     nl = jnp.clip(n_dot_l, 0.0, 1.0)
     nv = jnp.clip(n_dot_v, 1e-4, 1.0)

@@ -149,10 +149,10 @@ def _incoming(points: SurfacePoints, scene: Scene, effects: Effects) -> list:
     return out
 
 
-@jax.named_scope("lights")
 class PointFrame(NamedTuple):
     """What the lobes read of a point besides its shading normal: the geometric normal and the
-    view direction (component tuples), the material, and whether the point is live."""
+    view direction (component tuples), the material, and whether the point is live (unused by
+    the lobes; it lets a test count the live lanes each layer evaluation runs)."""
 
     normal: tuple
     view: tuple
@@ -160,6 +160,7 @@ class PointFrame(NamedTuple):
     valid: Array
 
 
+@jax.named_scope("lights")
 def _light_sum(frame: PointFrame, scene: Scene, effects: Effects, n: tuple, albedo: tuple,
                spec_params, incoming: list) -> tuple:
     """Sum over all directional and point lights of f(l, v) E cos at shading normal ``n``, per
@@ -193,24 +194,25 @@ def _store(tree, n: int):
     """``materialize_all`` of the float32[n] leaves of ``tree`` (scalars and integers stay as
     they are)."""
     leaves, treedef = jax.tree.flatten(tree)
-    points = [i for i, a in enumerate(leaves)
-              if jnp.shape(a) == (n,) and jnp.result_type(a) == jnp.float32]
-    stored = materialize_all(*(leaves[i] for i in points))
-    for i, a in zip(points, stored):
+    per_point = [i for i, a in enumerate(leaves)
+                 if jnp.shape(a) == (n,) and jnp.result_type(a) == jnp.float32]
+    stored = materialize_all(*(leaves[i] for i in per_point))
+    for i, a in zip(per_point, stored):
         leaves[i] = a
     return jax.tree.unflatten(treedef, leaves)
 
 
 def layer_sum(layer, angles: Array, lanes: int):
     """sum_k layer(angles[k]) (an array, or a pytree of them, summed leaf by leaf) for a
-    ``layer`` over ``lanes`` points: batched over the layers
-    (vmap), in blocks of as many layers as keep a block's evaluations within LAYER_LANES. All
+    ``layer`` over ``lanes`` points: batched over the layers (vmap), in blocks of as many
+    layers as keep a block's evaluations within LAYER_LANES. All
     the layers in one block need no loop; more run in a ``fori_loop`` of whole blocks, whose
     iterations each read back to the host on a GPU (about 27 us) but evaluate over LAYER_LANES
     / 2 layer-lanes apiece. Each layer is evaluated exactly once: those left over from the
     last whole block run after the loop."""
     n_layers = angles.shape[0]
     block = max(1, LAYER_LANES // max(int(lanes), 1))
+
     def batch(some):  # the layers of ``some`` evaluated together and summed
         return jax.tree.map(lambda x: jnp.sum(x, axis=0), jax.vmap(layer)(some))
 
@@ -253,6 +255,7 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
         alpha_g = jnp.square(_gather(m.roughness, mat))
         spec_params = (components(ks), shin, alpha_g)
     if effects.normal_map:
+        # Stored as arrays (``materialize_all`` takes them); the lobes read its components.
         n, length = materialize_all(*_normal_map(points, scene, effects))
         if effects.toksvig and effects.specular:
             spec_params = (components(ks), brdf.toksvig_shininess(shin, length[:, 0]),

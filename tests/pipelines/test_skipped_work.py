@@ -1,5 +1,5 @@
 """Skipped work stays skipped, counted at run time: every evaluation of the shader's light
-layer (``shading.shade``'s ``_lights``, the one place a layer is computed) reports from inside
+layer (``shading.shade``'s ``_light_sum``, the one place a layer is computed) reports from inside
 the compiled program how many lanes it ran and how many of them were live. Checkerboard shades
 half the points of deferred and runs half the layer evaluations, the counts the pipelines
 report are those evaluations, and a shader cost of c runs each chunk's layer 1 + c times:

@@ -41,6 +41,26 @@ def test_every_layer_is_evaluated_once_whatever_the_blocks(monkeypatch, n_layers
     assert looped == (n_layers * lanes > budget), jaxpr
 
 
+def test_a_layer_of_several_values_is_summed_value_by_value(monkeypatch):
+    # The shader's layers return one array a colour channel: blocks of 2, a loop of 3 and one
+    # layer after it, as (7, 5, 10) above.
+    monkeypatch.setattr(SHADE_MODULE, "LAYER_LANES", 10)
+    rng = np.random.default_rng(8)
+    angles = jnp.asarray(rng.uniform(-1, 1, 7), jnp.float32)
+    weights = jnp.asarray(rng.uniform(0, 1, 5), jnp.float32)
+
+    def layer(a):
+        return jnp.sin(weights + a), jnp.cos(weights * a), jnp.ones((5,), jnp.int32)
+
+    sines, cosines, count = jax.jit(lambda a: SHADE_MODULE.layer_sum(layer, a, 5))(angles)
+    a, w = np.asarray(angles)[:, None], np.asarray(weights)[None]
+    np.testing.assert_allclose(sines, np.sin(w + a).sum(axis=0), rtol=1e-6, atol=1e-6,
+                               err_msg="the first value: its layers' sum")
+    np.testing.assert_allclose(cosines, np.cos(w * a).sum(axis=0), rtol=1e-6, atol=1e-6,
+                               err_msg="the second value: its layers' sum")
+    np.testing.assert_array_equal(count, 7, err_msg="every layer once, in each value")
+
+
 def _shade_program(scene, pts):
     return jax.jit(lambda s, p: shade(surface_points(s, s.camera, *p), s))
 

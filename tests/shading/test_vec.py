@@ -44,3 +44,18 @@ def test_components_agree_with_numpy():
     np.testing.assert_array_equal(unit[:4], fallback[:4],
                                   err_msg="zero, infinite, NaN and underflowing rows fall back")
     np.testing.assert_array_equal(back, a, err_msg="stack(components(x)) is x")
+
+
+def test_a_scalar_component_broadcasts_like_the_array_it_stands_for():
+    # A directional light's direction is three scalars beside the points' [N] components.
+    points = _vectors(32, 6)[4:]
+    light = np.asarray([0.3, -0.8, 0.5], np.float32)
+    dot, cross, unit = jax.jit(lambda p, l: (
+        dot3(components(p), components(l)), stack(cross3(components(p), components(l))),
+        stack(normalize3(components(l), components(l)))))(points, light)
+    np.testing.assert_allclose(dot, points @ light, rtol=1e-5, atol=1e-3,
+                               err_msg="dot3 of [N] components with scalars")
+    np.testing.assert_allclose(cross, np.cross(points, light), rtol=1e-5, atol=1e-3,
+                               err_msg="cross3 of [N] components with scalars")
+    np.testing.assert_allclose(unit, light / np.linalg.norm(light), rtol=1e-6,
+                               err_msg="normalize3 of scalars")
