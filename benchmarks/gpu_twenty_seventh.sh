@@ -3,7 +3,7 @@
 #   bash benchmarks/gpu_twenty_seventh.sh hlo profile4 shader refprof   (about 5 minutes; ran)
 #   bash benchmarks/gpu_twenty_seventh.sh final   (right after, on the warm machine; ran)
 #   bash benchmarks/gpu_twenty_seventh.sh texel   (carry .v: .v/soa1 and .v/full; ran)
-#   bash benchmarks/gpu_twenty_seventh.sh fits    (with the device time left)
+#   bash benchmarks/gpu_twenty_seventh.sh fits    (not run: too little device time was left)
 #   bash benchmarks/gpu_twenty_seventh.sh soa  (ran; planhlo not run)  (carry .v too: .v/v26 is 71adbb1's jaxrender)
 # hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
 #   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
