@@ -8,7 +8,7 @@
 #   bash benchmarks/gpu_twenty_sixth.sh final                       (about 3 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh forward                     (about 4 minutes; ran)
 #   bash benchmarks/gpu_twenty_sixth.sh profile3                    (about 1 minute; ran)
-#   bash benchmarks/gpu_twenty_sixth.sh profile4                    (about 2 minutes; not yet run)
+#   profile4: moved to gpu_twenty_seventh.sh, which ran it
 # glass: v25 (3be237f: the transparent pass's depth test and its compaction in one prefix
 #   launch, the layer shading in chunks of the compacted list into an array the size of the
 #   whole fragment list, the composite in a second prefix launch) against this tree (the three
@@ -127,13 +127,6 @@ for part in "$@"; do
     prof deferred foliage 60 visibility gbuffer lighting
     prof checkerboard foliage 60 visibility plan shade spatial temporal counts
     prof dacs foliage 60 visibility dacs decide interpolate shade
-  elif [ "$part" = profile4 ]; then
-    for pipe in deferred checkerboard; do
-      PYTHONPATH=$PWD:/tmp/site timeout -k 5 70 python3 benchmarks/profile_kernels.py $pipe \
-        --scene foliage --top 12 --calls 3 --frames 8 --scope visibility --scope gbuffer \
-        --scope lighting --scope plan --scope shade --scope spatial --scope temporal 2>&1 \
-        | quiet | tee -a "$OUT/profile4.md"
-    done
   elif [ "$part" = checker ]; then
     side_by_side checker 80 "dense_checker after" --scenes foliage room glass \
       --pipelines checkerboard
