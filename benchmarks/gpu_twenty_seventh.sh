@@ -4,6 +4,7 @@
 #   bash benchmarks/gpu_twenty_seventh.sh final   (right after, on the warm machine; ran)
 #   bash benchmarks/gpu_twenty_seventh.sh texel   (carry .v: .v/soa1 and .v/full; ran)
 #   bash benchmarks/gpu_twenty_seventh.sh fits    (not run: too little device time was left)
+#   bash benchmarks/gpu_twenty_seventh.sh scenes1 / scenes2 / planhlo   (prepared, not run)
 #   bash benchmarks/gpu_twenty_seventh.sh soa  (ran; planhlo not run)  (carry .v too: .v/v26 is 71adbb1's jaxrender)
 # hlo: room's, foliage's and glass's shader in one launch over their covered pixels, each
 #   effect off in turn (bench_shade_parts.py), the optimized programs kept (hlo.tar.gz): which
@@ -25,6 +26,8 @@
 # fits: foliage at costs 0 and 256 after the change (the layers now fuse: on a CPU foliage's
 #   store 4 bytes a layer-lane, not 20). Slopes against deferred's were DACS 0.97x,
 #   checkerboard 0.77x, the visibility buffer 0.74x.
+# scenes1, scenes2: the nine other built-in scenes, every real-time pipeline, after the change
+#   (the README's opaque column is from before it). About 5 minutes each.
 # planhlo: checkerboard's optimized programs on foliage (8-frame sequence), for its plan's
 #   0.13 ms kernel (input_add_and_compare_reduce_select_fusion, profile4).
 # soa: the shader's lights and its last stage on per-point components (vec.components: tuples
@@ -74,6 +77,12 @@ for part in "$@"; do
       --scenes foliage --pipelines deferred checkerboard dacs visbuffer --costs 0 256 \
       --frames 8 --repeats 5 --budget 170 --out "$OUT/fits.jsonl" 2>&1 | quiet \
       | grep -v '^{' | tee -a "$OUT/fits.md"
+  elif [ "$part" = scenes1 ] || [ "$part" = scenes2 ]; then
+    if [ "$part" = scenes1 ]; then SC="stripes spheres thin terrain sliver"
+    else SC="many_small foliage_wind spheres_spin grass"; fi
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 400 $S --scenes $SC --pipelines deferred forward \
+      checkerboard dacs visbuffer object_space tads --json "$OUT/$part.json" 2>&1 | quiet \
+      | grep '^|' | tee -a "$OUT/$part.md"
   elif [ "$part" = planhlo ]; then
     XLA_FLAGS="--xla_dump_to=/tmp/dump --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
       timeout -k 5 90 python3 benchmarks/profile_kernels.py checkerboard --scene foliage \
