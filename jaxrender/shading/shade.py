@@ -250,15 +250,15 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     n = points.shading_normal
     spec_params = None
     if effects.specular:
-        ks = _gather(m.specular, mat)
+        ks = components(_gather(m.specular, mat))
         shin = _gather(m.shininess, mat)
         alpha_g = jnp.square(_gather(m.roughness, mat))
-        spec_params = (components(ks), shin, alpha_g)
+        spec_params = (ks, shin, alpha_g)
     if effects.normal_map:
         # Stored as arrays (``materialize_all`` takes them); the lobes read its components.
         n, length = materialize_all(*_normal_map(points, scene, effects))
         if effects.toksvig and effects.specular:
-            spec_params = (components(ks), brdf.toksvig_shininess(shin, length[:, 0]),
+            spec_params = (ks, brdf.toksvig_shininess(shin, length[:, 0]),
                            brdf.toksvig_roughness(alpha_g, length[:, 0]))
     # From here on every vector is a tuple of per-point components (``vec.components``).
     n, albedo = components(n), components(albedo)
@@ -290,4 +290,4 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     if effects.emissive:
         rgb = [x + e for x, e in zip(rgb, components(_gather(m.emissive, mat)))]
     rgb = [jnp.where(points.valid, jnp.where(jnp.isfinite(x), x, 0.0), 0.0) for x in rgb]
-    return jnp.stack(rgb, axis=-1)
+    return stack(tuple(rgb))
