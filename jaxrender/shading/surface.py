@@ -12,12 +12,15 @@ from jaxrender.shading.vec import components, cross3, dot, dot3, normalize3, sta
 from jaxrender.types import Array, SurfacePoints
 
 
-def _interp(w: tuple, attr: Array, corners: list) -> tuple:
-    """Barycentric weights (w0, w1, w2) of float32[N], vertex attribute [V, C], the triangles'
-    vertex indices per corner -> the interpolated attribute as C components of float32[N]."""
-    rows = [attr[c] for c in corners]  # [N, C] per corner
-    return tuple(w[0] * rows[0][:, i] + w[1] * rows[1][:, i] + w[2] * rows[2][:, i]
-                 for i in range(attr.shape[1]))
+def _at_corners(attr: Array, corners: list) -> list:
+    """Vertex attribute [V, C] at each corner's vertex int32[N]: per corner, C components."""
+    return [components(attr[c]) for c in corners]
+
+
+def _interp(w: tuple, rows: list) -> tuple:
+    """Barycentric weights (w0, w1, w2) of float32[N] applied to ``_at_corners`` rows -> the
+    interpolated attribute as C components of float32[N]."""
+    return tuple(w[0] * a + w[1] * b + w[2] * c for a, b, c in zip(*rows))
 
 
 @jax.named_scope("surface_points")
@@ -41,10 +44,10 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
     w_dy = components(jnp.where(vcol & jnp.isfinite(dbary_dy), dbary_dy, 0.0))
     t = jnp.where(valid, tri_id, 0)
     corners = list(components(scene.faces[t]))
-    p = [components(scene.positions[c]) for c in corners]
-    pos = _interp(w, scene.positions, corners)
+    p = _at_corners(scene.positions, corners)
+    pos = _interp(w, p)
     up = (jnp.float32(0.0), jnp.float32(0.0), jnp.float32(1.0))
-    n_interp = _interp(w, scene.normals, corners)
+    n_interp = _interp(w, _at_corners(scene.normals, corners))
     edge1 = tuple(b - a for a, b in zip(p[0], p[1]))
     edge2 = tuple(b - a for a, b in zip(p[0], p[2]))
     n_geo = normalize3(cross3(edge1, edge2), normalize3(n_interp, up))
@@ -52,20 +55,22 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
     view = normalize3(tuple(e - q for e, q in zip(components(camera.eye), pos)), n_geo)
     sign = jnp.where(dot3(n_geo, view) < 0.0, jnp.float32(-1.0), jnp.float32(1.0))
     n_geo, n_shade = tuple(c * sign for c in n_geo), tuple(c * sign for c in n_shade)
-    tangent = _interp(w, scene.tangents[:, :3], corners) + (scene.tangents[corners[0], 3],)
+    tangent = _interp(w, _at_corners(scene.tangents[:, :3], corners)) + (
+        scene.tangents[corners[0], 3],)
 
     def kept(v: tuple, fallback: tuple) -> Array:  # the point's value, or fallback if invalid
         return stack(tuple(jnp.where(valid, c, f) for c, f in zip(v, fallback)))
 
     zero, one = jnp.float32(0.0), jnp.float32(1.0)
+    uvs = _at_corners(scene.uvs, corners)
     return SurfacePoints(
         position=kept(pos, (zero, zero, zero)),
         normal=kept(n_geo, up),
         shading_normal=kept(n_shade, up),
         tangent=kept(tangent, (one, zero, zero, one)),
-        uv=stack(tuple(c * valid.astype(jnp.float32) for c in _interp(w, scene.uvs, corners))),
-        duv_dx=stack(_interp(w_dx, scene.uvs, corners)),
-        duv_dy=stack(_interp(w_dy, scene.uvs, corners)),
+        uv=stack(tuple(c * valid.astype(jnp.float32) for c in _interp(w, uvs))),
+        duv_dx=stack(_interp(w_dx, uvs)),
+        duv_dy=stack(_interp(w_dy, uvs)),
         view=kept(view, up),
         material=jnp.where(valid, scene.tri_material[t], 0),
         tri_id=jnp.where(valid, tri_id, -1),

@@ -16,10 +16,10 @@ def dot(a: Array, b: Array) -> Array:
 
 
 def safe_normalize(v: Array, fallback: Array) -> Array:
-    """v / |v|, or ``fallback`` (same shape) where |v| is zero or not finite."""
-    n2 = dot(v, v)
-    ok = (n2 > TINY) & jnp.isfinite(n2)
-    return jnp.where(ok, v * jnp.where(ok, 1.0 / jnp.sqrt(jnp.where(ok, n2, 1.0)), 0.0), fallback)
+    """v / |v| of [..., 3] arrays, or ``fallback`` (broadcast to v's shape) where |v| is zero or
+    not finite: ``normalize3`` of their components."""
+    fallback = jnp.broadcast_to(fallback, v.shape)
+    return stack(normalize3(components(v), components(fallback)))
 
 
 def cross(a: Array, b: Array) -> Array:
