@@ -3,6 +3,7 @@ same wherever it runs?
 
     python benchmarks/bench_cost_layers.py --scenes foliage room --sizes 4096 65536 0
     PYTHONPATH=.v/layer_groups python benchmarks/bench_cost_layers.py --label groups  # a variant
+    python benchmarks/bench_cost_layers.py --layers-minor  # the layers summed along lanes' rows
 
 Rasterizes each scene's default view, compacts its covered pixels, and times one launch of
 ``surface_points`` and ``shade()`` over the first n of them (0: all) at shader cost 0 and at
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 
 import jax
@@ -40,6 +42,15 @@ def covered_points(scene, camera, w, h):
     return tuple(flat(a)[keep] for a in (vis.tri_id, vis.bary, vis.dbary_dx, vis.dbary_dy))
 
 
+def layer_sum_minor(layer, angles, lanes: int):
+    """``shade.layer_sum`` with the layers as the minor axis ([lanes, layers], summed along each
+    lane's row) and every layer in one batch: a variant for this bench. Summed over the major
+    axis ([layers, lanes]), XLA reduces columns, which a launch of a few thousand lanes may not
+    spread over the GPU; a row reduction gives each lane its own threads."""
+    out = jax.vmap(layer, out_axes=-1)(angles)
+    return jax.tree.map(lambda x: jnp.sum(x, axis=-1), out)
+
+
 def time_launch(scene, camera, pts, repeats: int) -> tuple[float, float]:
     """(median ms, compile s) of one launch shading ``pts``."""
     fn = jax.jit(lambda s, c, p: shade(surface_points(s, c, *p), s))
@@ -60,7 +71,12 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--out", default="cost_layers.jsonl")
     ap.add_argument("--label", default="", help="a name for this tree in the rows")
+    ap.add_argument("--layers-minor", action="store_true",
+                    help="time layer_sum_minor in place of shade.layer_sum")
     a = ap.parse_args(argv)
+    if a.layers_minor:
+        # The package exports the function ``shade`` under the module's name.
+        sys.modules["jaxrender.shading.shade"].layer_sum = layer_sum_minor
     w, h = a.resolution
     print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)
     print("| scene | lanes | ms at 0 | ms at cost | ps per layer evaluation | compile s |")

@@ -5,6 +5,17 @@
 #   on an H100) and forward on room (3.06-3.11), kernels by scope: where their time goes after
 #   the shader moved to per-point components.
 # fits, planhlo: as in gpu_twenty_seventh.sh (prepared there, not run).
+#   (ran together: one H100 call)
+#   bash benchmarks/gpu_twenty_eighth.sh layers forward   (carry .v too: .v/base is 1a9e1f0's)
+# layers: one launch of the shader at 4096 / 16384 / 65536 / all covered lanes, costs 0 and
+#   256, the layers summed over their major axis ([layers, lanes], this tree) against their
+#   minor axis (bench_cost_layers.py --layers-minor). DACS's slope was 1.96x deferred's on
+#   foliage (fits above) with about the same lanes per invocation (1.41 against 1.37): its
+#   launches are small. Prediction: the minor axis brings 4096 lanes within 1.5x of all lanes.
+# forward: forward's colours written in its work list's order (dispatch.run_in_order, one
+#   contiguous slice a launch) against scattered into a fragment-sized array (.v/base). The
+#   scatter took 0.44 ms of glass's 4.83 and 0.20 of room's 2.96 (glassprof). Prediction:
+#   0.1-0.3 ms faster on glass and room, the images equal.
 . "$(dirname "$0")/gpu_env.sh"
 for part in "$@"; do
   if [ "$part" = glassprof ]; then
@@ -14,6 +25,16 @@ for part in "$@"; do
       transparent lights
     prof forward room 70 fragments alpha_test depth_test quads shade resolve counts lights \
       texture
+  elif [ "$part" = layers ]; then
+    for v in major minor; do
+      flag=""; [ $v = minor ] && flag="--layers-minor"
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
+        --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label $v $flag \
+        --out "$OUT/layers.jsonl" 2>&1 | quiet | tee -a "$OUT/layers.md"
+    done
+  elif [ "$part" = forward ]; then
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side forward 150 "base after" --scenes glass room foliage --pipelines forward
   else
     OUT=$OUT bash benchmarks/gpu_twenty_seventh.sh "$part"
   fi
