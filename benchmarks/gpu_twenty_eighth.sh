@@ -6,7 +6,7 @@
 #   the shader moved to per-point components.
 # fits, planhlo: as in gpu_twenty_seventh.sh (prepared there, not run).
 #   (ran together: one H100 call)
-#   bash benchmarks/gpu_twenty_eighth.sh layers forward   (carry .v too: .v/base is 1a9e1f0's)
+#   bash benchmarks/gpu_twenty_eighth.sh layers forward   (carry .v too: .v/base is f6ec9d1's)
 # layers: one launch of the shader at 4096 / 16384 / 65536 / all covered lanes, costs 0 and
 #   256, the layers summed over their major axis ([layers, lanes], this tree) against their
 #   minor axis (bench_cost_layers.py --layers-minor). DACS's slope was 1.96x deferred's on
