@@ -197,61 +197,20 @@ def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
     are passed live=False and their results are discarded. ``chunk`` 0 picks ``auto_chunk``
     for the list. Returns (out, the work list with its dispatch counts).
     """
-    sentinel = _rows(out)  # out-of-range index: scatter drops the lane
-
-    def write(acc, start, lane_items, live, vals):
-        return _scatter(acc, jnp.where(live, lane_items, sentinel), vals)
-
-    return _dispatch(work, fn, out, chunk, default_mode, write)
-
-
-def run_in_order(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
-                 chunk: int) -> tuple[Array, WorkList]:
-    """``run`` that leaves each value in its lane's place in the list: ``out[k]`` is the
-    value of ``work.items[k]`` for k < ``work.count`` (past it, whatever ``fn`` gave its
-    padding lanes). A launch writes one contiguous slice, not a scatter over ``out``; the
-    caller finds an item's value through its rank in the list. ``out`` (or its leaves) has
-    the list's length."""
-    n_rows = _rows(out)
-    pad = _launch_span(work, chunk, launch_mode())
-    wide = jax.tree.map(lambda a: jnp.concatenate([a, jnp.zeros((pad,) + a.shape[1:],
-                                                                 a.dtype)]), out)
-
-    def write(acc, start, lane_items, live, vals):
-        return jax.tree.map(lambda a, v: jax.lax.dynamic_update_slice_in_dim(
-            a, v.astype(a.dtype), start, 0), acc, vals)
-
-    wide, done = _dispatch(work, fn, wide, chunk, DEFAULT_LAUNCH, write)
-    return jax.tree.map(lambda a: a[:n_rows], wide), done
-
-
-def _launch_span(work: WorkList, chunk: int, mode: str) -> int:
-    """Lanes the largest launch of ``work`` may reach past its list's end."""
-    chunk = _chunk_for(work, chunk)
-    max_chunks = max(-(-work.items.shape[0] // chunk), 1)
-    # A block ends at or before the last chunk's end.
-    return chunk if mode in ("loop", "blocks") else chunk << max(max_chunks - 1, 0).bit_length()
-
-
-def _chunk_for(work: WorkList, chunk: int) -> int:
-    capacity = work.items.shape[0]
-    return int(min(resolve_chunk(chunk, capacity), max(capacity, 1)))
-
-
-def _dispatch(work: WorkList, fn, out, chunk: int, default_mode: str, write):
-    """The launches of ``run`` and ``run_in_order``: ``write(acc, start, lane items, live,
-    values) -> acc`` stores each launch's values."""
     items, n = work.items, work.count
+    chunk = int(min(resolve_chunk(chunk, items.shape[0]), max(items.shape[0], 1)))
     mode = launch_mode(default_mode)
-    chunk = _chunk_for(work, chunk)
     max_chunks = max(-(-items.shape[0] // chunk), 1)
-    # Zeros past the list for the lanes of the largest launch past it.
-    padded = jnp.concatenate([items, jnp.zeros((_launch_span(work, chunk, mode),), items.dtype)])
+    # Zeros past the list for the lanes of the largest launch past it (a block ends at or
+    # before the last chunk's end).
+    span = chunk if mode in ("loop", "blocks") else chunk << max(max_chunks - 1, 0).bit_length()
+    padded = jnp.concatenate([items, jnp.zeros((span,), items.dtype)])
+    sentinel = _rows(out)  # out-of-range index: scatter drops the lane
 
     def launch(start, size, acc):
         lane_items = jax.lax.dynamic_slice(padded, (start,), (size,))
         live = start + jnp.arange(size, dtype=jnp.int32) < n
-        return write(acc, start, lane_items, live, fn(lane_items, live))
+        return _scatter(acc, jnp.where(live, lane_items, sentinel), fn(lane_items, live))
 
     out, launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch, out, mode)
     return out, WorkList(items, n, n, chunk, launched)
@@ -272,23 +231,12 @@ def shade(
     (or the alpha test). Returns (out, the work list with its dispatch counts).
     """
 
-    return run(work, _shade_lanes(points_of, shade_fn), out, chunk)
-
-
-def shade_in_order(work: WorkList, points_of: Callable[[Array], object],
-                   shade_fn: Callable[[object], Array], out: Array,
-                   chunk: int = DEFAULT_CHUNK) -> tuple[Array, WorkList]:
-    """``shade`` whose results stay in list order (``run_in_order``): ``out[k]`` is the
-    colour of ``work.items[k]``."""
-    return run_in_order(work, _shade_lanes(points_of, shade_fn), out, chunk)
-
-
-def _shade_lanes(points_of, shade_fn):
     def fn(items, live):
         pts = points_of(items)
         pts = dataclasses.replace(pts, valid=pts.valid & live)
         return shade_fn(pts)
-    return fn
+
+    return run(work, fn, out, chunk)
 
 
 def dispatch_lanes(

@@ -284,47 +284,42 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
         else:
             quads = (first, draw.tri, jnp.sum(first, dtype=jnp.int32))
     with jax.named_scope("shade"):
+        colours = jnp.zeros((draw.tri.shape[0], 3), jnp.float32)
         if cfg.shade_helpers:
-            colours = jnp.zeros((draw.tri.shape[0], 3), jnp.float32)
             colours, work = dispatch_lanes(
                 ql["n_quads"] * 4, _helper_lane_fn(scene, camera, clip, cfg, ql), colours,
                 cfg.chunk, 4 * colours.shape[0])  # a quad holds one fragment at least
-            rows = None
         else:
             colours, work = forward_shade(scene, camera, work, unit_points, blended, cfg)
-            # In the work list's order: a shaded unit's colour is at its rank among them.
-            rows = jnp.maximum(jnp.cumsum(shade_unit, dtype=jnp.int32) - 1, 0)
     with jax.named_scope("resolve"):
-        image, covered = resolve_samples(colours, rows, draw, win, n_s, cfg)
+        image, covered = resolve_samples(colours[:, :3], draw, win, n_s, cfg)
     with jax.named_scope("counts"):
         counts = _counts(scene, draw, quads, work.invocations, covered, alpha_invocations, cfg)
         # The pre-pass transforms every vertex again (positions only).
         counts.update(vertex_counts(scene, full_passes=1, position_passes=int(cfg.z_prepass)))
-    image, counts = forward_blend(scene, draw, blended, colours, rows, image, counts, cfg)
+    image, counts = forward_blend(scene, draw, blended, colours, image, counts, cfg)
     image = poison_on_overflow(image, counts["overflow"])
     return Frame(image, counts, {"shade_count": per_pixel.reshape(cfg.height, cfg.width)})
 
 
 def forward_shade(scene, camera, work, unit_points, blended, cfg):
-    """The main pass's one dispatch of the work list of units to shade, its colours in the
-    list's order (``dispatch.shade_in_order``): with transparency, its transparent units
-    return the transparent pass's layer values (colour, opacity, view depth) too."""
+    """The main pass's one dispatch of the work list of units to shade: with transparency,
+    its transparent units return the transparent pass's layer values (colour, opacity, view
+    depth) too."""
     if blended is None:
         shader, channels = (lambda p: shade(p, scene)), 3
     else:
         shader, channels = layer_shader(scene, camera), LAYER_CHANNELS
     colours = jnp.zeros((work.items.shape[0], channels), jnp.float32)
-    return dispatch.shade_in_order(work, unit_points, shader, colours, cfg.chunk)
+    return dispatch.shade(work, unit_points, shader, colours, cfg.chunk)
 
 
-def resolve_samples(colours, rows, draw: DrawList, win, n_s: int, cfg):
-    """Each (sample, pixel) shows its winning fragment's unit colour (fragment i's in
-    ``colours[rows[i]]``, or ``colours[i]`` when ``rows`` is None); samples are averaged.
+def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
+    """Each (sample, pixel) shows its winning fragment's unit colour; samples are averaged.
     Returns (image float32[H, W, 3], covered pixels int32)."""
     h, w = cfg.height, cfg.width
     has = win >= 0
-    unit = draw.unit[jnp.maximum(win, 0)]
-    c = jnp.where(has[:, None], colours[unit if rows is None else rows[unit], :3], 0.0)
+    c = jnp.where(has[:, None], colours[draw.unit[jnp.maximum(win, 0)]], 0.0)
     image = jnp.mean(c.reshape(n_s, h, w, 3), axis=0)
     covered = jnp.sum(jnp.any(has.reshape(n_s, h * w), axis=0), dtype=jnp.int32)
     return image, covered

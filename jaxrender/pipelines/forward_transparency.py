@@ -34,15 +34,14 @@ def forward_front(draw, transparent, keep, cfg):
     return transparent & (draw.depth < z.at[draw.slot].get(mode="fill", fill_value=-jnp.inf))
 
 
-def forward_blend(scene, draw, front, values, rows, image, counts: dict, cfg):
-    """Blend forward's shaded transparent units (``values`` from its main pass, fragment i's
-    at ``values[rows[i]]``) over its opaque image; their shading is already in
-    ``shade_invocations``. Returns (image, counts)."""
+def forward_blend(scene, draw, front, values, image, counts: dict, cfg):
+    """Blend forward's shaded transparent units (``values`` from its main pass) over its opaque
+    image; their shading is already in ``shade_invocations``. Returns (image, counts)."""
     if front is None:
         return image, counts
     h, w = image.shape[:2]
     live = jnp.minimum(draw.fragments, draw.pixel.shape[0])  # one sample: a sorted prefix
-    layers = Layers(draw.pixel, draw.tri, draw.depth, front, values, live, rows)
+    layers = Layers(draw.pixel, draw.tri, draw.depth, front, values, live)
     with jax.named_scope("transparent"):
         out, extra = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts = dict(counts, **{k: v for k, v in extra.items() if k != "overflow"},

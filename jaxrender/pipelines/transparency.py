@@ -104,10 +104,7 @@ class Layers(NamedTuple):
     """Transparent fragments of one sample: pixel, tri, depth int32/float32[F]; front bool[F]
     (in front of the opaque depth: the ones shaded and blended); values float32[F, 5]
     (``layer_shader``'s, valid where front); live int32[] or None: no entry at or past it is
-    front (a fragment list's filled prefix), so the composite sorts only that prefix. rows
-    int32[F] or None: entry i's values are ``values[rows[i]]`` (values kept in a work list's
-    order), with rows[i] <= i, so that a prefix of the entries finds its values in the same
-    prefix of ``values``; None: ``values[i]``."""
+    front (a fragment list's filled prefix), so the composite sorts only that prefix."""
 
     pixel: Array
     tri: Array
@@ -115,12 +112,6 @@ class Layers(NamedTuple):
     front: Array
     values: Array
     live: Array | None = None
-    rows: Array | None = None
-
-
-def entry_values(layers: Layers) -> Array:
-    """float32[F, 5]: the values of each entry of ``layers``."""
-    return layers.values if layers.rows is None else layers.values[layers.rows]
 
 
 def in_front(valid: Array, pixel: Array, depth: Array, opaque_depth: Array,
@@ -266,9 +257,8 @@ def blend_factors(scene, layers: Layers) -> tuple[Array, Array, Array]:
     """(premultiplied colour a s float32[F, 3], transmittance float32[F]: 1 - a for over, 1 for
     additive, opacity float32[F])."""
     mode = scene.materials.blend[scene.tri_material[jnp.maximum(layers.tri, 0)]]
-    values = entry_values(layers)
-    a = jnp.clip(values[:, 3], 0.0, 1.0)
-    premult = values[:, :3] * a[:, None]
+    a = jnp.clip(layers.values[:, 3], 0.0, 1.0)
+    premult = layers.values[:, :3] * a[:, None]
     trans = jnp.where(mode == BLEND_OVER, 1.0 - a, 1.0)
     return premult, trans, a
 
@@ -373,7 +363,7 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
     mode = scene.materials.blend[scene.tri_material[jnp.maximum(layers.tri, 0)]]
     over = layers.front & (mode == BLEND_OVER)
     add = layers.front & (mode == BLEND_ADDITIVE)
-    w = wboit_weight(a, entry_values(layers)[:, 4])
+    w = wboit_weight(a, layers.values[:, 4])
     at_over = jnp.where(over, layers.pixel, n_pix)
     accum = jnp.zeros((n_pix, 3), jnp.float32).at[at_over].add(premult * w[:, None], mode="drop")
     weight = jnp.zeros((n_pix,), jnp.float32).at[at_over].add(a * w, mode="drop")
@@ -385,7 +375,7 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
 
 
 __all__ = ["blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list",
-           "entry_values", "front_work", "in_front", "LAYER_BYTES", "layer_values",
+           "front_work", "in_front", "LAYER_BYTES", "layer_values",
            "layer_shader", "Layers", "live_fragments", "merge_counts",
            "refuse_transparency", "settings_of", "shade_layers",
            "sorted_composite", "transparent_fragments", "transparent_pass", "wboit_weight",

@@ -54,18 +54,6 @@ def test_every_launch_mode_writes_the_same_and_counts_its_lanes(rng, monkeypatch
     chunks = _chunks_launched(mode, n_active, 64)
     assert (int(done.invocations), int(done.chunks), int(done.lanes)) == (
         n_active, chunks, chunks * 64), (mode, n_active)
-    # In list order: the k-th listed item's values at k, in every leaf of a tuple.
-    pair = lambda items, live: (fn(items, live), jnp.stack([items, -items], 1))  # noqa: E731
-    (first, second), in_order = dispatch.run_in_order(
-        work, pair, (jnp.zeros((300,), jnp.float32), jnp.zeros((300, 2), jnp.int32)), 64)
-    listed = np.flatnonzero(active)
-    assert (first.shape, second.shape) == ((300,), (300, 2)), mode
-    np.testing.assert_array_equal(np.asarray(first)[:n_active], listed * 2.0 + 1.0,
-                                  err_msg=f"{mode} in order")
-    np.testing.assert_array_equal(np.asarray(second)[:n_active],
-                                  np.stack([listed, -listed], 1), err_msg=f"{mode} in order")
-    assert (int(in_order.invocations), int(in_order.chunks), int(in_order.lanes)) == (
-        n_active, chunks, chunks * 64), (mode, n_active)
     # Lanes not one-to-one with outputs: every other lane writes.
     lanes_fn = lambda lanes, live: (lanes // 2, lanes.astype(jnp.float32), lanes % 2 == 0)  # noqa
     out, done = dispatch.dispatch_lanes(jnp.int32(2 * n_active), lanes_fn,
