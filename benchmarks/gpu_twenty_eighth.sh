@@ -14,10 +14,11 @@
 #   launches are small. Prediction: the minor axis brings 4096 lanes within 1.5x of all lanes.
 # split: .v/split sums the layers in groups (shade.layer_groups: groups x lanes near 2^18),
 #   each group a reduction of its own: the layers bench in that tree, then foliage's fits of
-#   deferred and DACS in both trees (costs 0 and 256). The layers bench above found 4096 lanes
-#   10x and 16384 lanes 2x foliage's full-screen cost per evaluation, in either axis order.
-#   Prediction: 4096 and 16384 lanes within 2x of the full screen, DACS's slope within 1.3x
-#   of deferred's (1.96x), deferred's unchanged.
+#   deferred and DACS in .v/base (f6ec9d1's, with the visibility pass alone) and .v/split
+#   (costs 0 and 256). The layers bench above found 4096 lanes 10x and 16384 lanes 2x
+#   foliage's full-screen cost per evaluation, in either axis order. Prediction: 4096 and
+#   16384 lanes within 2x of the full screen, DACS's slope within 1.3x of deferred's (1.96x),
+#   deferred's unchanged.
 # forward: forward's colours written in its work list's order (dispatch.run_in_order, one
 #   contiguous slice a launch) against scattered into a fragment-sized array (.v/base). The
 #   scatter took 0.44 ms of glass's 4.83 and 0.20 of room's 2.96 (glassprof). Prediction:
@@ -42,10 +43,10 @@ for part in "$@"; do
     PYTHONPATH=$PWD/.v/split:/tmp/site timeout -k 5 100 python3 benchmarks/bench_cost_layers.py \
       --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label split \
       --out "$OUT/layers.jsonl" 2>&1 | quiet | tee -a "$OUT/layers.md"
-    for t in after split; do
-      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+    for t in base split; do
+      R=$PWD/.v/$t; P="deferred dacs"; [ $t = base ] && P="visibility deferred dacs"
       PYTHONPATH=$R:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
-        --scenes foliage --pipelines deferred dacs --costs 0 256 --frames 8 --repeats 5 \
+        --scenes foliage --pipelines $P --costs 0 256 --frames 8 --repeats 5 \
         --budget 140 --out "$OUT/split_fits.jsonl" 2>&1 | quiet | grep -v '^{' \
         | sed "s/^/$t: /" | tee -a "$OUT/split_fits.md"
     done
