@@ -4,6 +4,7 @@ same wherever it runs?
     python benchmarks/bench_cost_layers.py --scenes foliage room --sizes 4096 65536 0
     PYTHONPATH=.v/layer_groups python benchmarks/bench_cost_layers.py --label groups  # a variant
     python benchmarks/bench_cost_layers.py --layers-minor  # the layers summed along lanes' rows
+    python benchmarks/bench_cost_layers.py --layers-grouped  # in groups, partial sums stored
 
 Rasterizes each scene's default view, compacts its covered pixels, and times one launch of
 ``surface_points`` and ``shade()`` over the first n of them (0: all) at shader cost 0 and at
@@ -51,6 +52,27 @@ def layer_sum_minor(layer, angles, lanes: int):
     return jax.tree.map(lambda x: jnp.sum(x, axis=-1), out)
 
 
+def layer_sum_grouped(layer, angles, lanes: int, fill: int = 1 << 18):
+    """``shade.layer_sum`` in groups, every layer in one batch: a variant for this bench. The
+    layers are cut into the most groups that divide them with groups x lanes at most ``fill``
+    (the threads an H100 holds), each group summed over its layers, the partial sums stored
+    (``fusion.materialize``: XLA may otherwise merge the two sums into one reduction, whose
+    threads are the lanes alone), then summed over the groups."""
+    from jaxrender.fusion import materialize
+
+    n_layers = angles.shape[0]
+    want = max(1, fill // max(int(lanes), 1))
+    groups = max(d for d in range(1, min(want, n_layers) + 1) if n_layers % d == 0)
+
+    def batch(some):
+        return jax.tree.map(lambda x: jnp.sum(x, axis=0), jax.vmap(layer)(some))
+
+    if groups == 1:
+        return batch(angles)
+    parts = jax.vmap(batch)(angles.reshape(groups, n_layers // groups))
+    return jax.tree.map(lambda x: jnp.sum(materialize(x), axis=0), parts)
+
+
 def time_launch(scene, camera, pts, repeats: int) -> tuple[float, float]:
     """(median ms, compile s) of one launch shading ``pts``."""
     fn = jax.jit(lambda s, c, p: shade(surface_points(s, c, *p), s))
@@ -73,10 +95,15 @@ def main(argv=None) -> int:
     ap.add_argument("--label", default="", help="a name for this tree in the rows")
     ap.add_argument("--layers-minor", action="store_true",
                     help="time layer_sum_minor in place of shade.layer_sum")
+    ap.add_argument("--layers-grouped", action="store_true",
+                    help="time layer_sum_grouped in place of shade.layer_sum")
     a = ap.parse_args(argv)
+    # The package exports the function ``shade`` under the module's name.
+    shade_module = sys.modules["jaxrender.shading.shade"]
     if a.layers_minor:
-        # The package exports the function ``shade`` under the module's name.
-        sys.modules["jaxrender.shading.shade"].layer_sum = layer_sum_minor
+        shade_module.layer_sum = layer_sum_minor
+    if a.layers_grouped:
+        shade_module.layer_sum = layer_sum_grouped
     w, h = a.resolution
     print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)
     print("| scene | lanes | ms at 0 | ms at cost | ps per layer evaluation | compile s |")

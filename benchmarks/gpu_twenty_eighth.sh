@@ -19,6 +19,10 @@
 #   foliage's full-screen cost per evaluation, in either axis order. Prediction: 4096 and
 #   16384 lanes within 2x of the full screen, DACS's slope within 1.3x of deferred's (1.96x),
 #   deferred's unchanged.
+# grouped (prepared, not run: no device time was left): the layers bench with the groups'
+#   partial sums stored (bench_cost_layers.py --layers-grouped), beside this tree's. If XLA
+#   merged split's two sums into one reduction, storing the partial sums keeps them apart.
+#   Prediction: 4096 and 16384 lanes within 2x of the full screen's cost per evaluation.
 # forward: forward's colours written in its work list's order (dispatch.run_in_order, one
 #   contiguous slice a launch) against scattered into a fragment-sized array (.v/base). The
 #   scatter took 0.44 ms of glass's 4.83 and 0.20 of room's 2.96 (glassprof). Prediction:
@@ -49,6 +53,13 @@ for part in "$@"; do
         --scenes foliage --pipelines $P --costs 0 256 --frames 8 --repeats 5 \
         --budget 140 --out "$OUT/split_fits.jsonl" 2>&1 | quiet | grep -v '^{' \
         | sed "s/^/$t: /" | tee -a "$OUT/split_fits.md"
+    done
+  elif [ "$part" = grouped ]; then
+    for v in tree grouped; do
+      flag=""; [ $v = grouped ] && flag="--layers-grouped"
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
+        --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label $v $flag \
+        --out "$OUT/grouped.jsonl" 2>&1 | quiet | tee -a "$OUT/grouped.md"
     done
   elif [ "$part" = forward ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
