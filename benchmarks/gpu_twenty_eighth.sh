@@ -6,6 +6,9 @@
 #   the shader moved to per-point components.
 # fits, planhlo: as in gpu_twenty_seventh.sh (prepared there, not run).
 #   (ran together: one H100 call)
+#   Prepared for the next session, one call (carry .v: .v/base and .v/ckmat; .v/base is the
+#   tree's jaxrender, rebuild it with git archive if the tree has moved):
+#   bash benchmarks/gpu_twenty_eighth.sh grouped ckmat scenes1
 #   bash benchmarks/gpu_twenty_eighth.sh layers forward   (carry .v too: .v/base is f6ec9d1's)
 # layers: one launch of the shader at 4096 / 16384 / 65536 / all covered lanes, costs 0 and
 #   256, the layers summed over their major axis ([layers, lanes], this tree) against their
@@ -23,6 +26,12 @@
 #   partial sums stored (bench_cost_layers.py --layers-grouped), beside this tree's. If XLA
 #   merged split's two sums into one reduction, storing the partial sums keeps them apart.
 #   Prediction: 4096 and 16384 lanes within 2x of the full screen's cost per evaluation.
+# ckmat (prepared, not run; carry .v: .v/base and .v/ckmat): checkerboard with its planned
+#   mask stored before its compaction (fusion.materialize), against .v/base. planhlo found
+#   the plan, neighbour, spatial and temporal tests fused into the compaction's block sums, one
+#   multi-output reduction kernel of 0.13 ms a frame writing 13 screen-sized arrays. Images
+#   and counts equal on the CPU (foliage, room, glass, 3-frame pans). Prediction: 0.05-0.1 ms
+#   a frame faster on foliage and room.
 # forward: forward's colours written in its work list's order (dispatch.run_in_order, one
 #   contiguous slice a launch) against scattered into a fragment-sized array (.v/base). The
 #   scatter took 0.44 ms of glass's 4.83 and 0.20 of room's 2.96 (glassprof). Prediction:
@@ -61,6 +70,9 @@ for part in "$@"; do
         --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label $v $flag \
         --out "$OUT/grouped.jsonl" 2>&1 | quiet | tee -a "$OUT/grouped.md"
     done
+  elif [ "$part" = ckmat ]; then
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side ckmat 150 "base ckmat" --scenes foliage room glass --pipelines checkerboard
   elif [ "$part" = forward ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side forward 150 "base after" --scenes glass room foliage --pipelines forward
