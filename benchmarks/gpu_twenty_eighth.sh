@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# Prepared in the twenty-eighth session (carry [".whl"]), one call each line:
-#   bash benchmarks/gpu_twenty_eighth.sh glassprof fits planhlo
+# Prepared in the twenty-eighth session (carry [".whl"]). Calls as they ran, one H100 each
+# (RESULTS.md, twenty-eighth session):
+#   1. bash benchmarks/gpu_twenty_eighth.sh glassprof fits planhlo
+#   2. bash benchmarks/gpu_twenty_eighth.sh layers forward   (carry .v: .v/base, f6ec9d1's)
+#   3. bash benchmarks/gpu_twenty_eighth.sh split   (carry .v: .v/base and .v/split, not kept)
+# Prepared for the next session, one call (carry [".whl"]; ckmat builds its own two trees):
+#   bash benchmarks/gpu_twenty_eighth.sh grouped ckmat scenes1
 # glassprof: forward and object space on glass (5.13 and 4.55 ms, the two worst real-time rows
 #   on an H100) and forward on room (3.06-3.11), kernels by scope: where their time goes after
 #   the shader moved to per-point components.
-# fits, planhlo: as in gpu_twenty_seventh.sh (prepared there, not run).
-#   (ran together: one H100 call)
-#   Prepared for the next session, one call (carry .v: .v/base and .v/ckmat; .v/base is the
-#   tree's jaxrender, rebuild it with git archive if the tree has moved):
-#   bash benchmarks/gpu_twenty_eighth.sh grouped ckmat scenes1
-#   bash benchmarks/gpu_twenty_eighth.sh layers forward   (carry .v too: .v/base is f6ec9d1's)
+# fits, planhlo, scenes1, scenes2: as in gpu_twenty_seventh.sh.
 # layers: one launch of the shader at 4096 / 16384 / 65536 / all covered lanes, costs 0 and
 #   256, the layers summed over their major axis ([layers, lanes], this tree) against their
 #   minor axis (bench_cost_layers.py --layers-minor). DACS's slope was 1.96x deferred's on
@@ -22,16 +22,16 @@
 #   foliage's full-screen cost per evaluation, in either axis order. Prediction: 4096 and
 #   16384 lanes within 2x of the full screen, DACS's slope within 1.3x of deferred's (1.96x),
 #   deferred's unchanged.
-# grouped (prepared, not run: no device time was left): the layers bench with the groups'
+# grouped (prepared, not run: too little device time was left to start a machine): the layers bench with the groups'
 #   partial sums stored (bench_cost_layers.py --layers-grouped), beside this tree's. If XLA
 #   merged split's two sums into one reduction, storing the partial sums keeps them apart.
 #   Prediction: 4096 and 16384 lanes within 2x of the full screen's cost per evaluation.
-# ckmat (prepared, not run; carry .v: .v/base and .v/ckmat): checkerboard with its planned
-#   mask stored before its compaction (fusion.materialize), against .v/base. planhlo found
-#   the plan, neighbour, spatial and temporal tests fused into the compaction's block sums, one
-#   multi-output reduction kernel of 0.13 ms a frame writing 13 screen-sized arrays. Images
-#   and counts equal on the CPU (foliage, room, glass, 3-frame pans). Prediction: 0.05-0.1 ms
-#   a frame faster on foliage and room.
+# ckmat (prepared, not run): checkerboard with its planned mask stored before its compaction
+#   (benchmarks/variants/checker_mask_stored.patch: fusion.materialize), against this tree.
+#   planhlo found the plan, neighbour, spatial and temporal tests fused into the compaction's
+#   block sums: one multi-output reduction kernel of 0.13 ms a frame writing 13 screen-sized
+#   arrays. Images and counts equal on the CPU (foliage, room, glass, 3-frame pans).
+#   Prediction: 0.05-0.1 ms a frame faster on foliage and room.
 # forward: forward's colours written in its work list's order (dispatch.run_in_order, one
 #   contiguous slice a launch) against scattered into a fragment-sized array (.v/base). The
 #   scatter took 0.44 ms of glass's 4.83 and 0.20 of room's 2.96 (glassprof). Prediction:
@@ -72,6 +72,9 @@ for part in "$@"; do
     done
   elif [ "$part" = ckmat ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    rm -rf .v/base .v/ckmat && mkdir -p .v/base && cp -r jaxrender .v/base/
+    cp -r .v/base .v/ckmat
+    (cd .v/ckmat && patch -p1 -s < ../../benchmarks/variants/checker_mask_stored.patch) || exit 1
     side_by_side ckmat 150 "base ckmat" --scenes foliage room glass --pipelines checkerboard
   elif [ "$part" = forward ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
