@@ -22,10 +22,11 @@
 #   foliage's full-screen cost per evaluation, in either axis order. Prediction: 4096 and
 #   16384 lanes within 2x of the full screen, DACS's slope within 1.3x of deferred's (1.96x),
 #   deferred's unchanged.
-# grouped (prepared, not run: too little device time was left to start a machine): the layers bench with the groups'
-#   partial sums stored (bench_cost_layers.py --layers-grouped), beside this tree's. If XLA
-#   merged split's two sums into one reduction, storing the partial sums keeps them apart.
-#   Prediction: 4096 and 16384 lanes within 2x of the full screen's cost per evaluation.
+# grouped (prepared, not run: too little device time was left to start a machine): the
+#   layers bench with the groups' partial sums stored (bench_cost_layers.py --layers-grouped),
+#   beside this tree's. If XLA merged split's two sums into one reduction, storing the
+#   partial sums keeps them apart. Prediction: 4096 and 16384 lanes within 2x of the full
+#   screen's cost per evaluation.
 # ckmat (prepared, not run): checkerboard with its planned mask stored before its compaction
 #   (benchmarks/variants/checker_mask_stored.patch: fusion.materialize), against this tree.
 #   planhlo found the plan, neighbour, spatial and temporal tests fused into the compaction's
