@@ -38,6 +38,15 @@
 #   scatter took 0.44 ms of glass's 4.83 and 0.20 of room's 2.96 (glassprof). Prediction:
 #   0.1-0.3 ms faster on glass and room, the images equal.
 . "$(dirname "$0")/gpu_env.sh"
+# layer_bench FILE LABEL [FLAG]: the layers bench (bench_cost_layers.py) in $TREE (default this
+# checkout), its rows in $OUT/FILE.jsonl and its table in $OUT/FILE.md.
+layer_bench() {
+  local file=$1 label=$2
+  shift 2
+  PYTHONPATH=${TREE:-$PWD}:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
+    --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label "$label" "$@" \
+    --out "$OUT/$file.jsonl" 2>&1 | quiet | tee -a "$OUT/$file.md"
+}
 for part in "$@"; do
   if [ "$part" = glassprof ]; then
     prof forward glass 90 fragments alpha_test depth_test quads shade resolve counts \
@@ -47,16 +56,10 @@ for part in "$@"; do
     prof forward room 70 fragments alpha_test depth_test quads shade resolve counts lights \
       texture
   elif [ "$part" = layers ]; then
-    for v in major minor; do
-      flag=""; [ $v = minor ] && flag="--layers-minor"
-      PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
-        --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label $v $flag \
-        --out "$OUT/layers.jsonl" 2>&1 | quiet | tee -a "$OUT/layers.md"
-    done
+    layer_bench layers major
+    layer_bench layers minor --layers-minor
   elif [ "$part" = split ]; then
-    PYTHONPATH=$PWD/.v/split:/tmp/site timeout -k 5 100 python3 benchmarks/bench_cost_layers.py \
-      --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label split \
-      --out "$OUT/layers.jsonl" 2>&1 | quiet | tee -a "$OUT/layers.md"
+    TREE=$PWD/.v/split layer_bench layers split
     for t in base split; do
       R=$PWD/.v/$t; P="deferred dacs"; [ $t = base ] && P="visibility deferred dacs"
       PYTHONPATH=$R:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
@@ -65,12 +68,8 @@ for part in "$@"; do
         | sed "s/^/$t: /" | tee -a "$OUT/split_fits.md"
     done
   elif [ "$part" = grouped ]; then
-    for v in tree grouped; do
-      flag=""; [ $v = grouped ] && flag="--layers-grouped"
-      PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
-        --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label $v $flag \
-        --out "$OUT/grouped.jsonl" 2>&1 | quiet | tee -a "$OUT/grouped.md"
-    done
+    layer_bench grouped tree
+    layer_bench grouped grouped --layers-grouped
   elif [ "$part" = ckmat ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     rm -rf .v/base .v/ckmat && mkdir -p .v/base && cp -r jaxrender .v/base/
