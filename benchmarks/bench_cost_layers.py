@@ -54,23 +54,27 @@ def layer_sum_minor(layer, angles, lanes: int):
 
 def layer_sum_grouped(layer, angles, lanes: int, fill: int = 1 << 18):
     """``shade.layer_sum`` in groups, every layer in one batch: a variant for this bench. The
-    layers are cut into the most groups that divide them with groups x lanes at most ``fill``
-    (the threads an H100 holds), each group summed over its layers, the partial sums stored
+    layers are cut into groups (groups x lanes at most ``fill``, the threads an H100 holds) of
+    ``n_layers // groups`` layers, each group summed over its layers, the partial sums stored
     (``fusion.materialize``: XLA may otherwise merge the two sums into one reduction, whose
-    threads are the lanes alone), then summed over the groups."""
+    threads are the lanes alone), then summed over the groups; the layers left over are
+    summed after them. (A cost of c layers has c + 1, often a prime: 257 at cost 256.)"""
     from jaxrender.fusion import materialize
 
     n_layers = angles.shape[0]
-    want = max(1, fill // max(int(lanes), 1))
-    groups = max(d for d in range(1, min(want, n_layers) + 1) if n_layers % d == 0)
+    groups = max(1, min(fill // max(int(lanes), 1), n_layers))
 
     def batch(some):
         return jax.tree.map(lambda x: jnp.sum(x, axis=0), jax.vmap(layer)(some))
 
     if groups == 1:
         return batch(angles)
-    parts = jax.vmap(batch)(angles.reshape(groups, n_layers // groups))
-    return jax.tree.map(lambda x: jnp.sum(materialize(x), axis=0), parts)
+    size = n_layers // groups
+    parts = jax.vmap(batch)(angles[:groups * size].reshape(groups, size))
+    total = jax.tree.map(lambda x: jnp.sum(materialize(x), axis=0), parts)
+    if groups * size < n_layers:
+        total = jax.tree.map(jnp.add, total, batch(angles[groups * size:]))
+    return total
 
 
 def time_launch(scene, camera, pts, repeats: int) -> tuple[float, float]:

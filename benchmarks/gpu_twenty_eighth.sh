@@ -1,11 +1,16 @@
 #!/usr/bin/env bash
 # Prepared in the twenty-eighth session (carry [".whl"]). Calls as they ran, one H100 each
-# (RESULTS.md, twenty-eighth session):
+# (RESULTS.md, twenty-eighth session; the layer parts have since been folded into layer_bench,
+# and split's layers bench then had a 100 s limit):
 #   1. bash benchmarks/gpu_twenty_eighth.sh glassprof fits planhlo
 #   2. bash benchmarks/gpu_twenty_eighth.sh layers forward   (carry .v: .v/base, f6ec9d1's)
 #   3. bash benchmarks/gpu_twenty_eighth.sh split   (carry .v: .v/base and .v/split, not kept)
-# Prepared for the next session, one call (carry [".whl"]; ckmat builds its own two trees):
+# Prepared for the next session, one call (carry [".whl", ".v"]):
 #   bash benchmarks/gpu_twenty_eighth.sh grouped ckmat scenes1
+# after building its two trees here (the device may have neither git nor patch):
+#   rm -rf .v/base .v/ckmat && mkdir -p .v/base .v/ckmat
+#   git archive HEAD jaxrender | tar -x -C .v/base && cp -r .v/base/jaxrender .v/ckmat/
+#   git apply --directory=.v/ckmat benchmarks/variants/checker_mask_stored.patch
 # glassprof: forward and object space on glass (5.13 and 4.55 ms, the two worst real-time rows
 #   on an H100) and forward on room (3.06-3.11), kernels by scope: where their time goes after
 #   the shader moved to per-point components.
@@ -15,18 +20,20 @@
 #   minor axis (bench_cost_layers.py --layers-minor). DACS's slope was 1.96x deferred's on
 #   foliage (fits above) with about the same lanes per invocation (1.41 against 1.37): its
 #   launches are small. Prediction: the minor axis brings 4096 lanes within 1.5x of all lanes.
-# split: .v/split sums the layers in groups (shade.layer_groups: groups x lanes near 2^18),
-#   each group a reduction of its own: the layers bench in that tree, then foliage's fits of
+# split: .v/split sums the layers in groups (shade.layer_groups: the most groups that divide
+#   the layers with groups x lanes near 2^18), each group a reduction of its own. It split
+#   nothing: cost 256 is 257 layers, a prime, so .v/split ran base's program (RESULTS.md).
+#   The layers bench in that tree, then foliage's fits of
 #   deferred and DACS in .v/base (f6ec9d1's, with the visibility pass alone) and .v/split
 #   (costs 0 and 256). The layers bench above found 4096 lanes 10x and 16384 lanes 2x
 #   foliage's full-screen cost per evaluation, in either axis order. Prediction: 4096 and
 #   16384 lanes within 2x of the full screen, DACS's slope within 1.3x of deferred's (1.96x),
 #   deferred's unchanged.
 # grouped (prepared, not run: too little device time was left to start a machine): the
-#   layers bench with the groups' partial sums stored (bench_cost_layers.py --layers-grouped),
-#   beside this tree's. If XLA merged split's two sums into one reduction, storing the
-#   partial sums keeps them apart. Prediction: 4096 and 16384 lanes within 2x of the full
-#   screen's cost per evaluation.
+#   layers bench with the layers in groups of n // groups (groups x lanes at most 2^18, the
+#   layers left over summed after them) and the groups' partial sums stored apart
+#   (bench_cost_layers.py --layers-grouped), beside this tree's. Split never ran in groups.
+#   Prediction: 4096 and 16384 lanes within 2x of the full screen's cost per evaluation.
 # ckmat (prepared, not run): checkerboard with its planned mask stored before its compaction
 #   (benchmarks/variants/checker_mask_stored.patch: fusion.materialize), against this tree.
 #   planhlo found the plan, neighbour, spatial and temporal tests fused into the compaction's
@@ -72,9 +79,7 @@ for part in "$@"; do
     layer_bench grouped grouped --layers-grouped
   elif [ "$part" = ckmat ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
-    rm -rf .v/base .v/ckmat && mkdir -p .v/base && cp -r jaxrender .v/base/
-    cp -r .v/base .v/ckmat
-    (cd .v/ckmat && patch -p1 -s < ../../benchmarks/variants/checker_mask_stored.patch) || exit 1
+    grep -q materialize .v/ckmat/jaxrender/pipelines/checkerboard.py || exit 1
     side_by_side ckmat 150 "base ckmat" --scenes foliage room glass --pipelines checkerboard
   elif [ "$part" = forward ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
