@@ -47,7 +47,8 @@ def layer_sum_minor(layer, angles, lanes: int):
     """``shade.layer_sum`` with the layers as the minor axis ([lanes, layers], summed along each
     lane's row) and every layer in one batch: a variant for this bench. Summed over the major
     axis ([layers, lanes]), XLA reduces columns, which a launch of a few thousand lanes may not
-    spread over the GPU; a row reduction gives each lane its own threads."""
+    spread over the GPU; a row reduction was to give each lane threads of its own (RESULTS.md,
+    twenty-eighth session: it did not change such launches)."""
     out = jax.vmap(layer, out_axes=-1)(angles)
     return jax.tree.map(lambda x: jnp.sum(x, axis=-1), out)
 
@@ -58,7 +59,7 @@ def layer_sum_grouped(layer, angles, lanes: int, fill: int = 1 << 18):
     ``n_layers // groups`` layers, each group summed over its layers, the partial sums stored
     (``fusion.materialize``: XLA may otherwise merge the two sums into one reduction, whose
     threads are the lanes alone), then summed over the groups; the layers left over are
-    summed after them. (A cost of c layers has c + 1, often a prime: 257 at cost 256.)"""
+    summed after them. (Shader cost c is c + 1 layers, often a prime: 257 at cost 256.)"""
     from jaxrender.fusion import materialize
 
     n_layers = angles.shape[0]
@@ -97,10 +98,11 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--out", default="cost_layers.jsonl")
     ap.add_argument("--label", default="", help="a name for this tree in the rows")
-    ap.add_argument("--layers-minor", action="store_true",
-                    help="time layer_sum_minor in place of shade.layer_sum")
-    ap.add_argument("--layers-grouped", action="store_true",
-                    help="time layer_sum_grouped in place of shade.layer_sum")
+    variant = ap.add_mutually_exclusive_group()
+    variant.add_argument("--layers-minor", action="store_true",
+                         help="time layer_sum_minor in place of shade.layer_sum")
+    variant.add_argument("--layers-grouped", action="store_true",
+                         help="time layer_sum_grouped in place of shade.layer_sum")
     a = ap.parse_args(argv)
     # The package exports the function ``shade`` under the module's name.
     shade_module = sys.modules["jaxrender.shading.shade"]
