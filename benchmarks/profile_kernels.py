@@ -161,6 +161,9 @@ def main(argv=None) -> int:
     ap.add_argument("--triangles", type=int, default=164_000, help="terrain size for 'raster'")
     ap.add_argument("--scene", default="terrain",
                     help="scene for a pipeline, 'name' or 'name:key=value,...'")
+    ap.add_argument("--shader-cost", type=int, default=None, metavar="N",
+                    help="the scene's shader cost (Effects.shader_cost: 1 + N light layers a "
+                         "point); default: the scene's own")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="pipeline config override, e.g. chunk=65536")
     ap.add_argument("--traversal", default="auto", help="for 'raster': auto, bbox, recompute, spans")
@@ -191,12 +194,15 @@ def main(argv=None) -> int:
     from jaxrender.shading import load_lit_scene
 
     name, params = parse_spec(args.scene, "--scene")
+    if args.shader_cost is not None:
+        params["effects"] = {**params.get("effects", {}), "shader_cost": args.shader_cost}
     sc = load_lit_scene(name, **params)
     cam = default_camera(sc)
     pipe = get_pipeline(args.what)
     overrides = parse_settings(args.set, "--set")
     cfg = make_config(args.what, width=w, height=h, **overrides)
-    label = f"{args.what} {args.scene} {w}x{h} {' '.join(args.set)}"
+    cost = "" if args.shader_cost is None else f" shader_cost={args.shader_cost}"
+    label = f"{args.what} {args.scene}{cost} {w}x{h} {' '.join(args.set)}"
     scopes = tuple(args.scope)
     if args.frames:
         from jaxrender.scene.camera_path import stack
