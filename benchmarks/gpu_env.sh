@@ -1,7 +1,8 @@
 # Sourced by the device-call scripts: the checkout's root as the working folder, the carried
 # wheels (.whl/: trimesh, colour-science, xatlas) installed into /tmp/site, unbuffered output,
 # no GPU preallocation, quiet() to drop XLA's log lines, trees() and side_by_side() to run the
-# sequence bench in several trees side by side, and prof() for a program's kernels by scope.
+# sequence bench in several trees side by side, prof() for a program's kernels by scope, and
+# layer_bench() for the shader-cost layers bench.
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
@@ -40,4 +41,13 @@ prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCEN
   PYTHONPATH=$PWD:/tmp/site timeout -k 5 "$limit" python3 benchmarks/profile_kernels.py "$pipe" \
     --scene "$scene" --top 25 --calls 3 $(printf -- '--scope %s ' "$@") 2>&1 | quiet \
     | tee -a "$OUT/profile.md"
+}
+# layer_bench FILE LABEL [FLAG]: the layers bench (bench_cost_layers.py) in $TREE (default this
+# checkout), its rows in $OUT/FILE.jsonl and its table in $OUT/FILE.md.
+layer_bench() {
+  local file=$1 label=$2
+  shift 2
+  PYTHONPATH=${TREE:-$PWD}:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
+    --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label "$label" "$@" \
+    --out "$OUT/$file.jsonl" 2>&1 | quiet | tee -a "$OUT/$file.md"
 }

@@ -47,15 +47,6 @@
 #   scatter took 0.44 ms of glass's 4.83 and 0.20 of room's 2.96 (glassprof). Prediction:
 #   0.1-0.3 ms faster on glass and room, the images equal.
 . "$(dirname "$0")/gpu_env.sh"
-# layer_bench FILE LABEL [FLAG]: the layers bench (bench_cost_layers.py) in $TREE (default this
-# checkout), its rows in $OUT/FILE.jsonl and its table in $OUT/FILE.md.
-layer_bench() {
-  local file=$1 label=$2
-  shift 2
-  PYTHONPATH=${TREE:-$PWD}:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
-    --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label "$label" "$@" \
-    --out "$OUT/$file.jsonl" 2>&1 | quiet | tee -a "$OUT/$file.md"
-}
 for part in "$@"; do
   if [ "$part" = glassprof ]; then
     prof forward glass 90 fragments alpha_test depth_test quads shade resolve counts \

@@ -10,6 +10,14 @@
 #   0.34 ms (cost 0 -> 256) and deferred's lighting by about 1.6; the DACS kernels that grow
 #   are its shade reductions, each launch 4,096-65,536 lanes.
 # grouped, ckmat: as in gpu_twenty_eighth.sh (prepared there, not run).
+# fused: the layers' three colour sums in one variadic reduce (fusion.sum_together), against
+#   .v/base (81cc791's jaxrender: three reduces). dacsdump showed each layer's shared term
+#   stored as f32[257, lanes] and read back by two reductions (R fused into the image's
+#   scatter, G and B together); on the CPU the one reduce stores no per-layer array (room's
+#   4,096-lane launch at cost 256: 102 MB of temporaries -> 2 MB). The layers bench and
+#   foliage's fits in both trees. Prediction: foliage's full-screen layer evaluation 11.8 ->
+#   5-8 ps, room's 105 -> 50-80; deferred's slope 20-50% lower; DACS's slope within 1.4x of
+#   deferred's.
 . "$(dirname "$0")/gpu_env.sh"
 for part in "$@"; do
   if [ "$part" = dacsprof ]; then
@@ -26,6 +34,42 @@ for part in "$@"; do
       timeout -k 5 90 python3 benchmarks/profile_kernels.py dacs --scene foliage \
       --shader-cost 256 --top 4 --calls 1 2>&1 | quiet > /dev/null
     (cd /tmp/dacsdump && tar -czf "$OUT/dacsdump.tar.gz" $(ls | grep after_optimizations.txt))
+  elif [ "$part" = fused ]; then
+    for t in base after; do  # each tree's shader at cost 256: temporaries, reduce kernels
+      R=$PWD; [ $t = base ] && R=$PWD/.v/base
+      PYTHONPATH=$R:/tmp/site timeout -k 5 60 python3 - <<'PY' 2>&1 | quiet | sed "s/^/$t: /" \
+        | tee -a "$OUT/fused_hlo.md"
+import re
+import jax, jax.numpy as jnp, numpy as np
+from jaxrender.shading import load_lit_scene, shade
+from jaxrender.shading.surface import surface_points
+from jaxrender.study.backend import with_shader_cost
+for name in ("foliage", "room"):
+    scene = with_shader_cost(load_lit_scene(name), 256)
+    rng = np.random.default_rng(0)
+    for n in (4096, 65536):
+        tri = rng.integers(0, scene.faces.shape[0], n).astype(np.int32)
+        bary = rng.dirichlet(np.ones(3), n).astype(np.float32)
+        z = np.zeros((n, 3), np.float32)
+        pts = tuple(map(jnp.asarray, (tri, bary, z, z)))
+        c = jax.jit(lambda s, p: shade(surface_points(s, s.camera, *p), s)).lower(
+            scene, pts).compile()
+        txt = c.as_text()
+        print(name, n, "temp bytes", c.memory_analysis().temp_size_in_bytes, "reduce fusions",
+              len(re.findall(r"= \S+ fusion\(.*kind=kInput, calls=%fused_reduce", txt)),
+              "reduces", len(re.findall(r" reduce\(", txt)))
+PY
+    done
+    TREE=$PWD/.v/base layer_bench fused base
+    layer_bench fused fused
+    for t in base after; do
+      R=$PWD; [ $t = base ] && R=$PWD/.v/base
+      P="deferred dacs checkerboard"; [ $t = base ] && P="visibility $P"
+      PYTHONPATH=$R:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
+        --scenes foliage --pipelines $P --costs 0 256 --frames 8 --repeats 5 \
+        --budget 140 --out "$OUT/fused_fits.jsonl" --label $t 2>&1 | quiet | grep -v '^{' \
+        | sed "s/^/$t: /" | tee -a "$OUT/fused_fits.md"
+    done
   else
     OUT=$OUT bash benchmarks/gpu_twenty_eighth.sh "$part"
   fi
