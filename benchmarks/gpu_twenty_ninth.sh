@@ -60,11 +60,11 @@ for name in ("foliage", "room"):
               "reduces", len(re.findall(r" reduce\(", txt)))
 PY
     done
-    TREE=$PWD/.v/base layer_bench fused base
-    layer_bench fused fused
+    TREE=$PWD/.v/base layer_bench fused base --sizes 4096 65536 0
+    layer_bench fused fused --sizes 4096 65536 0
     for t in base after; do
       R=$PWD; [ $t = base ] && R=$PWD/.v/base
-      P="deferred dacs checkerboard"; [ $t = base ] && P="visibility $P"
+      P="deferred dacs"
       PYTHONPATH=$R:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
         --scenes foliage --pipelines $P --costs 0 256 --frames 8 --repeats 5 \
         --budget 140 --out "$OUT/fused_fits.jsonl" --label $t 2>&1 | quiet | grep -v '^{' \
