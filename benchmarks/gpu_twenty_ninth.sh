@@ -11,8 +11,10 @@
 #   are its shade reductions, each launch 4,096-65,536 lanes.
 # grouped, ckmat: as in gpu_twenty_eighth.sh (prepared there, not run).
 # ckmat2: checkerboard with its mask stored (this tree, since a787d68) against
-#   .v/base, in the reverse order of ckmat's call (this tree first), then checkerboard's and
-#   deferred's fits on foliage in this tree (the crossover after the change).
+#   .v/base, in the reverse order of ckmat's call (this tree first).
+# dacsprof2: as dacsprof at cost 256 alone, with each scope's longest kernels listed
+#   (profile_kernels.py --scope-top): which of DACS's shade kernels take its 0.34 ms.
+# ckfits: checkerboard's and deferred's fits on foliage in this tree (after ckmat).
 # fused: the layers' three colour sums in one variadic reduce (fusion.sum_together), against
 #   .v/base (81cc791's jaxrender: three reduces). dacsdump showed each layer's shared term
 #   stored as f32[257, lanes] and read back by two reductions (R fused into the image's
@@ -37,9 +39,16 @@ for part in "$@"; do
       timeout -k 5 90 python3 benchmarks/profile_kernels.py dacs --scene foliage \
       --shader-cost 256 --top 4 --calls 1 2>&1 | quiet > /dev/null
     (cd /tmp/dacsdump && tar -czf "$OUT/dacsdump.tar.gz" $(ls | grep after_optimizations.txt))
+  elif [ "$part" = dacsprof2 ]; then
+    for p in "dacs --scope shade --scope decide" "deferred --scope lighting --scope gbuffer"; do
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 90 python3 benchmarks/profile_kernels.py $p \
+        --scene foliage --shader-cost 256 --top 6 --calls 3 --scope-top 14 2>&1 | quiet \
+        | tee -a "$OUT/dacsprof2.md"
+    done
   elif [ "$part" = ckmat2 ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side ckmat2 120 "after base" --scenes foliage room glass --pipelines checkerboard
+  elif [ "$part" = ckfits ]; then
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
       --scenes foliage --pipelines deferred checkerboard --costs 0 256 --frames 8 --repeats 5 \
       --budget 140 --out "$OUT/ckmat2_fits.jsonl" 2>&1 | quiet | grep -v '^{' \

@@ -72,9 +72,10 @@ def hlo_sources(fn, *args) -> dict[str, str]:
 
 
 def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
-                 scopes: tuple[str, ...] = (), copies: bool = False) -> dict:
+                 scopes: tuple[str, ...] = (), copies: bool = False, scope_top: int = 0) -> dict:
     """Trace ``calls`` steady-state calls of ``fn(*args)`` and print the kernel table; with
-    ``scopes``, also the kernel time whose source lies under each named scope."""
+    ``scopes``, also the kernel time whose source lies under each named scope, and that
+    scope's ``scope_top`` longest kernels."""
     fn = jax.jit(fn)
     jax.block_until_ready(fn(*args))  # compile and warm up outside the trace
     jax.block_until_ready(fn(*args))
@@ -104,9 +105,12 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
         sources = {}
         print(f"(no HLO sources: {type(e).__name__}: {e})")
     for scope in scopes:  # kernels fused across scopes count where XLA named them
-        ms = sum(us for n, us in total.items()
-                 if f"{scope}/" in sources.get(n.replace(".", "_"), "")) / calls / 1e3
-        print(f"scope {scope}: kernels {ms:.3f} ms/call")
+        inside = {n: us for n, us in total.items()
+                  if f"{scope}/" in sources.get(n.replace(".", "_"), "")}
+        print(f"scope {scope}: kernels {sum(inside.values()) / calls / 1e3:.3f} ms/call")
+        for name, us in sorted(inside.items(), key=lambda kv: -kv[1])[:scope_top]:
+            print(f"    {name[:48]}: {us / calls / 1e3:.3f} ms/call in {count[name] / calls:.0f} "
+                  f"launches")
     if copies:
         print_copy_neighbours(events, sources, calls)
     print("| kernel | ms/call | launches/call | from |\n|---|---:|---:|---|")
@@ -176,6 +180,8 @@ def main(argv=None) -> int:
                     help="also name the device copies by the kernels around them")
     ap.add_argument("--scope", action="append", default=[],
                     help="sum the kernel time under this named scope (e.g. taa)")
+    ap.add_argument("--scope-top", type=int, default=0, metavar="N",
+                    help="also list each scope's N longest kernels")
     args = ap.parse_args(argv)
     w, h = args.resolution
     print(f"device: {device_description()}, jax {jax.__version__}")
@@ -209,7 +215,7 @@ def main(argv=None) -> int:
 
         path = stack([cam] * args.frames)
         profile_call(lambda s, c: pipe.render_sequence(s, c, cfg).image, sc, path,
-                     calls=args.calls, top=args.top, scopes=scopes,
+                     calls=args.calls, top=args.top, scopes=scopes, scope_top=args.scope_top,
                      label=f"{label} sequence of {args.frames} frames")
         return 0
     if pipe.prepares:  # object_space: charts built on the host, outside
@@ -222,10 +228,10 @@ def main(argv=None) -> int:
             return frame
 
         profile_call(one_frame, sc, cam, static, calls=args.calls, top=args.top, label=label,
-                     scopes=scopes, copies=args.copies)
+                     scopes=scopes, scope_top=args.scope_top, copies=args.copies)
         return 0
     profile_call(lambda s, c: pipe.render(s, c, cfg), sc, cam, calls=args.calls, top=args.top,
-                 label=label, scopes=scopes, copies=args.copies)
+                 label=label, scopes=scopes, scope_top=args.scope_top, copies=args.copies)
     return 0
 
 
