@@ -56,7 +56,7 @@ for part in "$@"; do
   elif [ "$part" = fused ]; then
     for t in base after; do  # each tree's shader at cost 256: temporaries, reduce kernels
       R=$PWD; [ $t = base ] && R=$PWD/.v/base
-      PYTHONPATH=$R:/tmp/site timeout -k 5 60 python3 - <<'PY' 2>&1 | quiet | sed "s/^/$t: /" \
+      PYTHONPATH=$R:/tmp/site timeout -k 5 60 python3 -P - <<'PY' 2>&1 | quiet | sed "s/^/$t: /" \
         | tee -a "$OUT/fused_hlo.md"
 import re
 import jax, jax.numpy as jnp, numpy as np
