@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
-# Prepared in the twenty-ninth session (carry [".whl", ".v"]; .v/base and .v/ckmat as
-# gpu_twenty_eighth.sh's header builds them):
-#   bash benchmarks/gpu_twenty_ninth.sh dacsprof grouped ckmat
+# Written in the twenty-ninth session (carry [".whl", ".v"]; .v/base and .v/ckmat as
+# gpu_twenty_eighth.sh's header builds them). Calls as they ran, one H100 each:
+#   1. bash benchmarks/gpu_twenty_ninth.sh dacsprof grouped ckmat
+#   2. bash benchmarks/gpu_twenty_ninth.sh fused   (this tree then had fusion.sum_together:
+#      benchmarks/variants/layers_one_reduce.patch)
+# Prepared for the next session, one call (.v/base needed):
+#   bash benchmarks/gpu_twenty_ninth.sh dacsprof2 ckmat2 ckfits
 # dacsprof: DACS and deferred on foliage at shader costs 0 and 256, kernels by scope
 #   (profile_kernels.py --shader-cost), and DACS's optimized programs at cost 256. DACS's
 #   slope was 1.6-2.0x deferred's (twenty-eighth session) with about the same lanes launched
