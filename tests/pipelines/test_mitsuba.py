@@ -5,8 +5,8 @@ directional lights, the same triangle arrays handed to both. Mitsuba's conventio
 pixel i covers [i, i+1), centre i + 0.5, row 0 at the top, vertical field of view; its box
 filter (radius 0.5) keeps every sample in its own pixel, as our box filter does. Both are
 converged (k = 8 stratified cell centres here, 32 x 32 jittered strata in Mitsuba), so the
-images agree to well above 45 dB in linear radiance (at least 8 dB above it on these scenes;
-k = 16 adds 3-9 dB and takes three times as long in the suite's unoptimized compiles). On failure the two images and their
+images agree to well above 45 dB in linear radiance (k = 16 adds a few dB and takes three
+times as long under the suite's unoptimized compiles). On failure the two images and their
 difference are written to error_output/ (gitignored).
 """
 
