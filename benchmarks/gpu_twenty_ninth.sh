@@ -2,7 +2,8 @@
 # Written in the twenty-ninth session (carry [".whl", ".v"]; .v/base and .v/ckmat as
 # gpu_twenty_eighth.sh's header builds them). Calls as they ran, one H100 each:
 #   1. bash benchmarks/gpu_twenty_ninth.sh dacsprof grouped ckmat
-#   2. bash benchmarks/gpu_twenty_ninth.sh fused   (this tree then had fusion.sum_together:
+#   2. bash benchmarks/gpu_twenty_ninth.sh fused   (this tree then had fusion.sum_together;
+#      it is now reverted, so a rerun takes it from .v/fused, built as .v/ckmat is, with
 #      benchmarks/variants/layers_one_reduce.patch)
 # Prepared for the next session, one call (.v/base needed):
 #   bash benchmarks/gpu_twenty_ninth.sh dacsprof2 ckmat2 ckfits
@@ -58,8 +59,9 @@ for part in "$@"; do
       --budget 140 --out "$OUT/ckmat2_fits.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/ckmat2_fits.md"
   elif [ "$part" = fused ]; then
-    for t in base after; do  # each tree's shader at cost 256: temporaries, reduce kernels
-      R=$PWD; [ $t = base ] && R=$PWD/.v/base
+    grep -q sum_together .v/fused/jaxrender/fusion.py || exit 1
+    for t in base fused; do  # each tree's shader at cost 256: temporaries, reduce kernels
+      R=$PWD/.v/$t
       PYTHONPATH=$R:/tmp/site timeout -k 5 60 python3 -P - <<'PY' 2>&1 | quiet | sed "s/^/$t: /" \
         | tee -a "$OUT/fused_hlo.md"
 import re
@@ -84,9 +86,9 @@ for name in ("foliage", "room"):
 PY
     done
     TREE=$PWD/.v/base layer_bench fused base --sizes 4096 65536 0
-    layer_bench fused fused --sizes 4096 65536 0
-    for t in base after; do
-      R=$PWD; [ $t = base ] && R=$PWD/.v/base
+    TREE=$PWD/.v/fused layer_bench fused fused --sizes 4096 65536 0
+    for t in base fused; do
+      R=$PWD/.v/$t
       P="deferred dacs"
       PYTHONPATH=$R:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
         --scenes foliage --pipelines $P --costs 0 256 --frames 8 --repeats 5 \
