@@ -67,8 +67,15 @@ def hlo_sources(fn, *args) -> dict[str, str]:
         if m:
             name, op, src, ln = m.groups()
             where = f" @ {os.path.basename(src)}:{ln}" if src else ""
-            out[name.replace(".", "_")] = f"{op.split('/', 1)[-1][-60:]}{where}"
+            # The whole scope path: the table shortens it, a scope's sum matches anywhere in it.
+            out[name.replace(".", "_")] = f"{op.split('/', 1)[-1]}{where}"
     return out
+
+
+def short_source(source: str, keep: int = 60) -> str:
+    """A source for the table: the last ``keep`` characters of its scope path, and its place."""
+    op, at, where = source.partition(" @ ")
+    return f"{op[-keep:]}{at}{where}"
 
 
 def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
@@ -116,7 +123,7 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
     print("| kernel | ms/call | launches/call | from |\n|---|---:|---:|---|")
     for name, us in sorted(total.items(), key=lambda kv: -kv[1])[:top]:
         print(f"| {name[:48]} | {us / calls / 1e3:.3f} | {count[name] / calls:.0f} | "
-              f"{sources.get(name.replace('.', '_'), '')} |")
+              f"{short_source(sources.get(name.replace('.', '_'), ''))} |")
     return {"label": label, "wall_ms": wall_ms, "kernel_ms": kernel_ms,
             "launches": len(events) / calls,
             "top": sorted(((n, t / calls / 1e3, count[n] / calls) for n, t in total.items()),
