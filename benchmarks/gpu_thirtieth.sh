@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Prepared in the thirtieth session (carry [".whl", ".v"]; .v/base as gpu_twenty_eighth.sh's
+# header builds it, from 81cc791). One call:
+#   bash benchmarks/gpu_thirtieth.sh dacsprof2 dacshlo ckmat2 ckfits
+# dacsprof2, ckmat2, ckfits: as gpu_twenty_ninth.sh prepared them; dacsprof2's scope sums now
+#   match a kernel's whole scope path (f68cd04: a path cut to 60 characters undercounted).
+# dacshlo: DACS's and deferred's optimized programs on foliage at shader cost 256, and for each
+#   fusion that reduces or scatters, its name, kind and root (dacshlo.md): which kernel sums
+#   each colour's layers, and whether a sum is fused into a scatter whose threads run over
+#   the launch's lanes alone.
+. "$(dirname "$0")/gpu_env.sh"
+for part in "$@"; do
+  if [ "$part" = dacshlo ]; then
+    for pipe in dacs deferred; do
+      rm -rf /tmp/hlo_$pipe
+      XLA_FLAGS="--xla_dump_to=/tmp/hlo_$pipe --xla_dump_hlo_as_text" PYTHONPATH=$PWD:/tmp/site \
+        timeout -k 5 120 python3 benchmarks/profile_kernels.py $pipe --scene foliage \
+        --shader-cost 256 --top 30 --calls 3 2>&1 | quiet | tee -a "$OUT/dacshlo.md"
+      main=$(ls -S /tmp/hlo_$pipe/*after_optimizations.txt | head -1)
+      gzip -c "$main" > "$OUT/hlo_$pipe.txt.gz"
+      echo "### $pipe: $main" >> "$OUT/dacshlo.md"
+      grep -E "^\s*%?[a-z_.0-9-]+ = .* fusion\(.*kind=k(Input|Loop|Custom)" "$main" \
+        | grep -E "reduce|scatter" | sed -E 's/metadata=.*//' | cut -c1-300 \
+        >> "$OUT/dacshlo.md"
+    done
+  else
+    OUT=$OUT bash benchmarks/gpu_twenty_ninth.sh "$part"
+  fi
+done
+exit 0
