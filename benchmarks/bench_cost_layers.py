@@ -5,6 +5,7 @@ same wherever it runs?
     PYTHONPATH=.v/layer_groups python benchmarks/bench_cost_layers.py --label groups  # a variant
     python benchmarks/bench_cost_layers.py --layers-minor  # the layers summed along lanes' rows
     python benchmarks/bench_cost_layers.py --layers-grouped  # in groups, partial sums stored
+    python benchmarks/bench_cost_layers.py --layers-stored  # small launches: layers stored, summed
 
 Rasterizes each scene's default view, compacts its covered pixels, and times one launch of
 ``surface_points`` and ``shade()`` over the first n of them (0: all) at shader cost 0 and at
@@ -31,6 +32,8 @@ from jaxrender.scene import default_camera
 from jaxrender.shading import load_lit_scene, shade, surface_points
 from jaxrender.study.backend import with_shader_cost
 from jaxrender.timing import device_description, time_call
+
+PACKAGE_LAYER_SUM = sys.modules["jaxrender.shading.shade"].layer_sum
 
 
 def covered_points(scene, camera, w, h):
@@ -78,6 +81,27 @@ def layer_sum_grouped(layer, angles, lanes: int, fill: int = 1 << 18):
     return total
 
 
+STORED_LANES = 1 << 16
+STORED_EVALUATIONS = 1 << 25  # layers x lanes at most: 200 MB of stored values for 3 channels
+
+
+def layer_sum_stored(layer, angles, lanes: int, most: int = STORED_EVALUATIONS):
+    """``shade.layer_sum`` for a launch of at most STORED_LANES lanes and ``most`` layer
+    evaluations (benchmarks/variants/layers_stored.patch puts it in the package): every layer's
+    value stored (``fusion.materialize_all``: the evaluations run as a scatter's updates, a
+    thread each, over layers x lanes x 3 channels), then summed over the layers. XLA otherwise
+    fuses the evaluations into the reduction over the layers, whose threads a launch of a few
+    thousand lanes does not give the GPU enough of (RESULTS.md, twenty-eighth and twenty-ninth
+    sessions: 4,096 lanes cost 9-12x the full screen a layer evaluation, in any axis order or
+    grouping). Larger launches take the package's own."""
+    from jaxrender.fusion import materialize_all
+
+    if int(lanes) > STORED_LANES or angles.shape[0] * int(lanes) > most:
+        return PACKAGE_LAYER_SUM(layer, angles, lanes)
+    leaves, tree = jax.tree.flatten(jax.vmap(layer)(angles))
+    return jax.tree.unflatten(tree, [jnp.sum(x, axis=0) for x in materialize_all(*leaves)])
+
+
 def time_launch(scene, camera, pts, repeats: int) -> tuple[float, float]:
     """(median ms, compile s) of one launch shading ``pts``."""
     fn = jax.jit(lambda s, c, p: shade(surface_points(s, c, *p), s))
@@ -103,6 +127,8 @@ def main(argv=None) -> int:
                          help="time layer_sum_minor in place of shade.layer_sum")
     variant.add_argument("--layers-grouped", action="store_true",
                          help="time layer_sum_grouped in place of shade.layer_sum")
+    variant.add_argument("--layers-stored", action="store_true",
+                         help="time layer_sum_stored in place of shade.layer_sum")
     a = ap.parse_args(argv)
     # The package exports the function ``shade`` under the module's name.
     shade_module = sys.modules["jaxrender.shading.shade"]
@@ -110,6 +136,8 @@ def main(argv=None) -> int:
         shade_module.layer_sum = layer_sum_minor
     if a.layers_grouped:
         shade_module.layer_sum = layer_sum_grouped
+    if a.layers_stored:
+        shade_module.layer_sum = layer_sum_stored
     w, h = a.resolution
     print(f"device: {device_description()}, jax {jax.__version__}, {a.label}", flush=True)
     print("| scene | lanes | ms at 0 | ms at cost | ps per layer evaluation | compile s |")

@@ -1,13 +1,24 @@
 #!/usr/bin/env bash
 # Prepared in the thirtieth session (carry [".whl", ".v"]; .v/base as gpu_twenty_eighth.sh's
 # header builds it, from 81cc791). One call:
-#   bash benchmarks/gpu_thirtieth.sh dacsprof2 dacshlo ckmat2 ckfits targets
+#   bash benchmarks/gpu_thirtieth.sh stored dacsprof2 dacshlo ckmat2 ckfits targets
+# .v/stored: mkdir -p .v/stored && git archive HEAD jaxrender | tar -x -C .v/stored &&
+#   git apply --directory=.v/stored benchmarks/variants/layers_stored.patch
 # dacsprof2, ckmat2, ckfits: as gpu_twenty_ninth.sh prepared them; dacsprof2's scope sums now
 #   match a kernel's whole scope path (f68cd04: a path cut to 60 characters undercounted).
 # dacshlo: DACS's and deferred's optimized programs on foliage at shader cost 256, and for each
 #   fusion that reduces or scatters, its name, kind and root (dacshlo.md): which kernel sums
 #   each colour's layers, and whether a sum is fused into a scatter whose threads run over
 #   the launch's lanes alone.
+# stored (.v/stored: this tree plus benchmarks/variants/layers_stored.patch): a launch of at
+#   most 65,536 lanes stores every layer's value ([layers, lanes] a channel), then sums them,
+#   so that the layer evaluations run a thread each rather than inside a reduction whose threads
+#   are the lanes. The layers bench on foliage (4,096-65,536 lanes and the full screen) with
+#   the package's sum and --layers-stored; then deferred's and DACS's fits on foliage (costs 0
+#   and 256) in this tree and in .v/stored. Images equal on the CPU (DACS and deferred, foliage
+#   at 480x270, cost 32). Prediction: 4,096 lanes from about 10x the full screen's time per
+#   evaluation to at most 3x, 16,384 from 2.7x to at most 1.5x, the full screen unchanged;
+#   DACS's slope from 1.6-2.0x deferred's to at most 1.3x.
 # targets: every real-time pipeline on glass and room (8-frame pans, images only), where the
 #   3 ms rows left are (H100: glass 2.91-5.13, forward on room 3.06-3.11). The issue's targets
 #   are an H200's; no call has had one. The script runs it first when the card is an H200.
@@ -22,6 +33,21 @@ for part in $parts; do
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 300 $S --scenes glass room --pipelines deferred \
       forward checkerboard dacs visbuffer object_space tads --json "$OUT/targets.json" 2>&1 \
       | quiet | grep '^|' | tee -a "$OUT/targets.md"
+  elif [ "$part" = stored ]; then
+    grep -q STORED_LANES .v/stored/jaxrender/shading/shade.py || exit 1
+    for v in package stored; do
+      flag=""; [ $v = stored ] && flag=--layers-stored
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/bench_cost_layers.py \
+        --scenes foliage --sizes 4096 16384 65536 0 --repeats 10 --label $v $flag \
+        --out "$OUT/stored_layers.jsonl" 2>&1 | quiet | tee -a "$OUT/stored.md"
+    done
+    for t in after stored; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 150 python3 benchmarks/bench_time_work.py \
+        --scenes foliage --pipelines deferred dacs --costs 0 256 --frames 8 --repeats 5 \
+        --budget 140 --out "$OUT/stored_fits.jsonl" --label $t 2>&1 | quiet | grep -v '^{' \
+        | sed "s/^/$t: /" | tee -a "$OUT/stored.md"
+    done
   elif [ "$part" = dacshlo ]; then
     for pipe in dacs deferred; do
       rm -rf /tmp/hlo_$pipe
