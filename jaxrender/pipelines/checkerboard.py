@@ -35,7 +35,6 @@ import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
-from jaxrender.fusion import materialize
 from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.gbuffer import shade_through
 from jaxrender.pipelines.pixel_ids import (
@@ -184,11 +183,8 @@ def plan_checker(vis, t, cfg: CheckerboardConfig) -> CheckerPlan:
     pattern = checker_mask(h, w, cfg.frame + t)
     orphan = covered & ~pattern & ~any_n
     active = covered & (pattern | orphan)
-    # Stored before the compaction: fused into the compaction's block sums, the plan and the
-    # reconstruction's tests ran as one multi-output reduction kernel, laid out for its sums
-    # and not for its dozen screen-sized stores, slower than the two kernels apart.
-    listed = materialize(active.reshape(-1))
-    return CheckerPlan(dispatch.WorkList.of(listed), covered, active, orphan, ins, ncov)
+    return CheckerPlan(dispatch.WorkList.of(active.reshape(-1)), covered, active, orphan, ins,
+                       ncov)
 
 
 def shade_checker(scene, camera, vis, plan: CheckerPlan, cfg: CheckerboardConfig):
