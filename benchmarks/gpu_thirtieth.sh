@@ -1,4 +1,7 @@
 #!/usr/bin/env bash
+# Calls as they ran (thirtieth session, one H200, RESULTS.md): 1. `stored dacsprof2 dacshlo
+# ckmat2 ckfits` (targets ran first, on the H200; the call brings back eight files, and
+# targets.md was not one; cut at 580 s in ckfits); 2. `targets` alone, on the warm machine.
 # Prepared in the thirtieth session (carry [".whl", ".v"]; .v/base as gpu_twenty_eighth.sh's
 # header builds it, from 81cc791). One call:
 #   bash benchmarks/gpu_thirtieth.sh stored dacsprof2 dacshlo ckmat2 ckfits targets

@@ -39,8 +39,9 @@
 #   planhlo found the plan, neighbour, spatial and temporal tests fused into the compaction's
 #   block sums: one multi-output reduction kernel of 0.13 ms a frame writing 13 screen-sized
 #   arrays. Images and counts equal on the CPU (foliage, room, glass, 3-frame pans); the
-#   checkerboard, skipped-work and program-outputs tests pass in that tree (run them with
-#   PYTHONPATH=.v/ckmat pytest -o pythonpath= ...: pyproject's pythonpath puts "." first).
+#   checkerboard, skipped-work and program-outputs tests were said to pass in that tree, but
+#   run as `PYTHONPATH=.v/ckmat pytest -o pythonpath= ...` they import this checkout's
+#   jaxrender (pytest puts the root first); a tree is tested from a copy of tests/ beside it.
 #   Prediction: 0.05-0.1 ms a frame faster on foliage and room.
 # forward: forward's colours written in its work list's order (dispatch.run_in_order, one
 #   contiguous slice a launch) against scattered into a fragment-sized array (.v/base). The
