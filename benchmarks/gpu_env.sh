@@ -25,14 +25,22 @@ trees() {
   done
 }
 # side_by_side NAME SECONDS "TREE ..." ARGS...: the caller's $S in each tree (after: this
-# checkout, else .v/TREE), its tables tagged with the tree, in $OUT/NAME.md.
+# checkout, else .v/TREE), then again in the reverse order (A B B A; ORDERS=1: once), its
+# tables tagged with the tree and the pass, in $OUT/NAME.md. The tree that ran second was
+# 0.05-0.21 ms a frame faster in both of two calls (RESULTS.md, thirtieth session), so one
+# order alone cannot tell a change from its place in the call.
 side_by_side() {
-  local name=$1 limit=$2 names=$3 t R
+  local name=$1 limit=$2 names=$3 t R pass order
   shift 3
-  for t in $names; do
-    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
-    PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $S "$@" --json "$OUT/${name}_$t.json" 2>&1 \
-      | quiet | grep '^|' | sed "s/^/$t: /" | tee -a "$OUT/$name.md"
+  order=$names
+  for pass in $(seq 1 "${ORDERS:-2}"); do
+    for t in $order; do
+      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $S "$@" \
+        --json "$OUT/${name}_${t}_$pass.json" 2>&1 | quiet | grep '^|' \
+        | sed "s/^/$t ($pass): /" | tee -a "$OUT/$name.md"
+    done
+    order=$(printf '%s\n' $order | tac | tr '\n' ' ')
   done
 }
 prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCENE by named scope
