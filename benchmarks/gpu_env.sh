@@ -2,7 +2,7 @@
 # wheels (.whl/: trimesh, colour-science, xatlas) installed into /tmp/site, unbuffered output,
 # no GPU preallocation, quiet() to drop XLA's log lines, trees() and side_by_side() to run the
 # sequence bench in several trees side by side, prof() for a program's kernels by scope, and
-# layer_bench() for the shader-cost layers bench.
+# layer_bench() for the shader-cost layers bench, bundle_out() to pack $OUT into one file.
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
@@ -58,4 +58,15 @@ layer_bench() {
   PYTHONPATH=${TREE:-$PWD}:/tmp/site timeout -k 5 150 python3 benchmarks/bench_cost_layers.py \
     --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label "$label" "$@" \
     --out "$OUT/$file.jsonl" 2>&1 | quiet | tee -a "$OUT/$file.md"
+}
+# bundle_out: every file in $OUT but the bundle appended to $OUT/bundle.tar and removed. A call
+# brings back at most 8 files from $OUT (device README); a script that calls this after each
+# part leaves the bundle and the running part's files, so a call cut at its limit still
+# returns every finished part.
+bundle_out() {
+  local f files=()
+  for f in "$OUT"/*; do
+    [ -f "$f" ] && [ "$(basename "$f")" != bundle.tar ] && files+=("$(basename "$f")")
+  done
+  [ ${#files[@]} -eq 0 ] || tar -rf "$OUT/bundle.tar" -C "$OUT" --remove-files "${files[@]}"
 }
