@@ -2,6 +2,12 @@
 # Calls as they ran (thirtieth session, one H200, RESULTS.md): 1. `stored dacsprof2 dacshlo
 # ckmat2 ckfits` (targets ran first, on the H200; the call brings back eight files, and
 # targets.md was not one; cut at 580 s in ckfits); 2. `targets` alone, on the warm machine.
+# Prepared for the next session, one call (carry [".whl", ".v"], .v/base as below):
+#   bash benchmarks/gpu_thirtieth.sh dacsprof ckmat3 ckfits
+#   dacsprof (gpu_twenty_ninth.sh's): DACS and deferred at costs 0 and 256 on one card, untraced
+#   wall beside kernels, to split DACS's slope (3.4x deferred's on the H200) between its kernels
+#   and the time between them; ckmat3: the stored mask (.v/ckmat, gpu_twenty_eighth.sh's header)
+#   against this tree, A B B A.
 # Prepared in the thirtieth session (carry [".whl", ".v"]; .v/base as gpu_twenty_eighth.sh's
 # header builds it, from 81cc791). One call:
 #   bash benchmarks/gpu_thirtieth.sh stored dacsprof2 dacshlo ckmat2 ckfits targets
@@ -36,6 +42,10 @@ for part in $parts; do
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 300 $S --scenes glass room --pipelines deferred \
       forward checkerboard dacs visbuffer object_space tads --json "$OUT/targets.json" 2>&1 \
       | quiet | grep '^|' | tee -a "$OUT/targets.md"
+  elif [ "$part" = ckmat3 ]; then
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    grep -q materialize .v/ckmat/jaxrender/pipelines/checkerboard.py || exit 1
+    side_by_side ckmat3 120 "after ckmat" --scenes foliage room glass --pipelines checkerboard
   elif [ "$part" = stored ]; then
     grep -q STORED_LANES .v/stored/jaxrender/shading/shade.py || exit 1
     for v in package stored; do
