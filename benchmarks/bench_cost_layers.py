@@ -93,7 +93,8 @@ def layer_sum_stored(layer, angles, lanes: int, most: int = STORED_EVALUATIONS):
     fuses the evaluations into the reduction over the layers, whose threads a launch of a few
     thousand lanes does not give the GPU enough of (RESULTS.md, twenty-eighth and twenty-ninth
     sessions: 4,096 lanes cost 9-12x the full screen a layer evaluation, in any axis order or
-    grouping). Larger launches take the package's own."""
+    grouping). Larger launches take the package's own. Not adopted: 1.6-3.6x slower a layer
+    evaluation than the package's sum on an H200 (RESULTS.md, thirtieth session)."""
     from jaxrender.fusion import materialize_all
 
     if int(lanes) > STORED_LANES or angles.shape[0] * int(lanes) > most:
