@@ -6,8 +6,11 @@
 #   bash benchmarks/gpu_thirtieth.sh dacsprof ckmat3 ckfits
 #   dacsprof (gpu_twenty_ninth.sh's): DACS and deferred at costs 0 and 256 on one card, untraced
 #   wall beside kernels, to split DACS's slope (3.4x deferred's on the H200) between its kernels
-#   and the time between them; ckmat3: the stored mask (.v/ckmat, gpu_twenty_eighth.sh's header)
-#   against this tree, A B B A.
+#   and the time between them. Its fit puts DACS's growth from cost 0 to 256 near 0.51 ms on
+#   the H200; the H100 profile (twenty-ninth session) had kernels +0.34 and wall +0.93.
+#   Prediction: kernels +0.3-0.4 ms, untraced wall minus kernels +0.1-0.2. ckmat3: the stored
+#   mask (.v/ckmat, gpu_twenty_eighth.sh's header) against this tree, A B B A. Prediction: no
+#   difference beyond 0.05 ms a frame once the orders are averaged.
 # Prepared in the thirtieth session (carry [".whl", ".v"]; .v/base as gpu_twenty_eighth.sh's
 # header builds it, from 81cc791). One call:
 #   bash benchmarks/gpu_thirtieth.sh stored dacsprof2 dacshlo ckmat2 ckfits targets
