@@ -72,6 +72,12 @@ def hlo_sources(fn, *args) -> dict[str, str]:
     return out
 
 
+def source_of(sources: dict[str, str], kernel: str, default: str = "") -> str:
+    """The source ``hlo_sources`` found for a kernel (kernels name instructions with dots as
+    underscores)."""
+    return sources.get(kernel.replace(".", "_"), default)
+
+
 def short_source(source: str, keep: int = 60) -> str:
     """A source for the table: the last ``keep`` characters of its scope path, and its place."""
     op, at, where = source.partition(" @ ")
@@ -113,7 +119,7 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
         print(f"(no HLO sources: {type(e).__name__}: {e})")
     for scope in scopes:  # kernels fused across scopes count where XLA named them
         inside = {n: us for n, us in total.items()
-                  if f"{scope}/" in sources.get(n.replace(".", "_"), "")}
+                  if f"{scope}/" in source_of(sources, n)}
         print(f"scope {scope}: kernels {sum(inside.values()) / calls / 1e3:.3f} ms/call")
         for name, us in sorted(inside.items(), key=lambda kv: -kv[1])[:scope_top]:
             print(f"    {name[:48]}: {us / calls / 1e3:.3f} ms/call in {count[name] / calls:.0f} "
@@ -123,7 +129,7 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
     print("| kernel | ms/call | launches/call | from |\n|---|---:|---:|---|")
     for name, us in sorted(total.items(), key=lambda kv: -kv[1])[:top]:
         print(f"| {name[:48]} | {us / calls / 1e3:.3f} | {count[name] / calls:.0f} | "
-              f"{short_source(sources.get(name.replace('.', '_'), ''))} |")
+              f"{short_source(source_of(sources, name))} |")
     return {"label": label, "wall_ms": wall_ms, "kernel_ms": kernel_ms,
             "launches": len(events) / calls,
             "top": sorted(((n, t / calls / 1e3, count[n] / calls) for n, t in total.items()),
@@ -141,7 +147,7 @@ def print_copy_neighbours(events, sources: dict, calls: int) -> None:
         around = []
         for j in (i - 1, i + 1):
             if 0 <= j < len(ev) and "memcpy" not in ev[j][0].lower():
-                around.append(sources.get(ev[j][0].replace(".", "_"), ev[j][0])[-50:])
+                around.append(source_of(sources, ev[j][0], ev[j][0])[-50:])
         where[(name[:16], " / ".join(around))] += us
     print("| copy | ms/call | kernels before / after |\n|---|---:|---|")
     for (name, around), us in sorted(where.items(), key=lambda kv: -kv[1])[:12]:
