@@ -8,13 +8,19 @@ os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # path has its own tests, which force it (tests/study/test_compile_pool.py).
 os.environ.setdefault("JAXRENDER_COMPILE_PROCESSES", "0")
 # The tests run tiny inputs through many distinct programs, so XLA compile time dominates the
-# suite. LLVM at -O0 halves compile time (measured: rasterizer 19-21 s -> 9-12 s on the 2-core
-# CI machine) and doubles run time, a good trade here. Never used for timings: benchmarks and
-# studies run at XLA's default level.
-if "xla_backend_optimization_level" not in os.environ.get("XLA_FLAGS", ""):
-    os.environ["XLA_FLAGS"] = (
-        os.environ.get("XLA_FLAGS", "") + " --xla_backend_optimization_level=0"
-    ).strip()
+# suite. LLVM at -O0 halves compile time and doubles run time, a good trade here. XLA:CPU's
+# older loop emitters (``xla_cpu_use_fusion_emitters=false``) compile these programs in about
+# 60% of the time its MLIR fusion emitters take (benchmarks/RESULTS.md, "The test suite's
+# compiles"). With them alone, two programs that must agree bit for bit (one launch against
+# chunks, spans against bounding boxes) differed in the last bit; capped at AVX, which has no
+# fused multiply-add, they agree again (so, likely, some loops fused a multiply-add and others
+# did not). Never used for timings: benchmarks and studies run at XLA's defaults. A flag
+# the caller set wins.
+TEST_XLA_FLAGS = {"xla_backend_optimization_level": "0", "xla_cpu_use_fusion_emitters": "false",
+                  "xla_cpu_max_isa": "AVX"}
+for _name, _value in TEST_XLA_FLAGS.items():
+    if _name not in os.environ.get("XLA_FLAGS", ""):
+        os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --{_name}={_value}".strip()
 
 import jax  # noqa: E402
 import numpy as np  # noqa: E402

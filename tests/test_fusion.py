@@ -63,8 +63,11 @@ def test_materialize_survives_optimisation_and_keeps_the_result():
     x = jnp.asarray(np.random.default_rng(5).normal(size=(64, 3)).astype(np.float32))
     stored = jax.jit(lambda a: _chain(a, True))
     text = stored.lower(x).compile().as_text()
-    assert len(re.findall(r"\bscatter\(", text)) >= 6, \
-        "XLA removed the stores: the compiled chain has fewer than its 6 scatters"
+    # A store survives as a scatter, or as the loop of row updates XLA:CPU's older emitters
+    # (the test suite's, tests/conftest.py) expand a scatter into.
+    stores = re.findall(r"\b(?:scatter|dynamic-update-slice)\(", text)
+    assert len(stores) >= 6, \
+        f"XLA removed the stores: the compiled chain has {len(stores)} of its 6 scatters"
     np.testing.assert_allclose(stored(x), jax.jit(lambda a: _chain(a, False))(x), rtol=1e-6,
                                atol=1e-7, err_msg="the stored chain computes another value")
 
