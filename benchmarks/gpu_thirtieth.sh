@@ -36,7 +36,8 @@
 #   are an H200's; no call has had one. The script runs it first when the card is an H200.
 . "$(dirname "$0")/gpu_env.sh"
 parts="$*"
-if nvidia-smi --query-gpu=name --format=csv,noheader | grep -q H200; then
+if [ -z "${NO_AUTO_TARGETS:-}" ] && nvidia-smi --query-gpu=name --format=csv,noheader \
+  | grep -q H200; then
   parts="targets ${parts/targets/}"
 fi
 for part in $parts; do
