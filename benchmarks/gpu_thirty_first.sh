@@ -18,7 +18,8 @@
 # Other parts go to gpu_thirtieth.sh (dacsprof, ckfits, ckmat3, ...).
 . "$(dirname "$0")/gpu_env.sh"
 parts="$*"
-if nvidia-smi --query-gpu=name --format=csv,noheader | grep -q H200; then
+if [ -z "${NO_AUTO_TARGETS:-}" ] && nvidia-smi --query-gpu=name --format=csv,noheader \
+  | grep -q H200; then
   parts="targets ${parts/targets/}"
 fi
 for part in $parts; do
@@ -30,8 +31,8 @@ for part in $parts; do
         | quiet | grep '^|\|^device' | sed "s/^/$t: /" | tee -a "$OUT/pairs_sort.md"
     done
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
-    side_by_side pairs 150 "after pairs" --scenes glass room --pipelines deferred forward \
-      checkerboard
+    side_by_side pairs 150 "after pairs" --scenes ${PAIRS_SCENES:-glass room} \
+      --pipelines ${PAIRS_PIPELINES:-deferred forward checkerboard}
   else
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirtieth.sh "$part"
   fi
