@@ -70,3 +70,14 @@ bundle_out() {
   done
   [ ${#files[@]} -eq 0 ] || tar -rf "$OUT/bundle.tar" -C "$OUT" --remove-files "${files[@]}"
 }
+# targets_first "PARTS": the parts, with `targets` (issue 23's real-time rows, whose targets are
+# an H200's) moved first when the card is an H200, unless NO_AUTO_TARGETS is set (a script
+# handing one part to another).
+targets_first() {
+  local parts=$1
+  if [ -z "${NO_AUTO_TARGETS:-}" ] && nvidia-smi --query-gpu=name --format=csv,noheader \
+    | grep -q H200; then
+    parts="targets ${parts/targets/}"
+  fi
+  echo "$parts"
+}

@@ -35,11 +35,7 @@
 #   3 ms rows left are (H100: glass 2.91-5.13, forward on room 3.06-3.11). The issue's targets
 #   are an H200's; no call has had one. The script runs it first when the card is an H200.
 . "$(dirname "$0")/gpu_env.sh"
-parts="$*"
-if [ -z "${NO_AUTO_TARGETS:-}" ] && nvidia-smi --query-gpu=name --format=csv,noheader \
-  | grep -q H200; then
-  parts="targets ${parts/targets/}"
-fi
+parts=$(targets_first "$*")
 for part in $parts; do
   if [ "$part" = targets ]; then
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"

@@ -17,11 +17,7 @@
 #   program keeps a sort that is not cub's, it is a comparison sort: many times slower; drop it.
 # Other parts go to gpu_thirtieth.sh (dacsprof, ckfits, ckmat3, ...).
 . "$(dirname "$0")/gpu_env.sh"
-parts="$*"
-if [ -z "${NO_AUTO_TARGETS:-}" ] && nvidia-smi --query-gpu=name --format=csv,noheader \
-  | grep -q H200; then
-  parts="targets ${parts/targets/}"
-fi
+parts=$(targets_first "$*")
 for part in $parts; do
   if [ "$part" = pairs ]; then
     grep -q pair_sort .v/pairs/jaxrender/sorting.py || exit 1
