@@ -2,7 +2,8 @@
 # wheels (.whl/: trimesh, colour-science, xatlas) installed into /tmp/site, unbuffered output,
 # no GPU preallocation, quiet() to drop XLA's log lines, trees() and side_by_side() to run the
 # sequence bench in several trees side by side, prof() for a program's kernels by scope,
-# layer_bench() for the shader-cost layers bench, and bundle_out() to pack $OUT into one file.
+# layer_bench() for the shader-cost layers bench, bundle_out() to pack $OUT into one file, and
+# targets_first() to run issue 23's rows first on an H200.
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
