@@ -43,12 +43,13 @@ def child(pipelines: list[str], out: str) -> None:
     import jax
 
     from jaxrender.pipelines import get_pipeline, make_config
+    from jaxrender.study.compile_cache import BACKEND_COMPILE_EVENT
     from tests.pipelines.transparent_scenes import THREE, layered_quads
 
     compile_s = [0.0]
 
     def on_duration(event: str, duration: float, **_) -> None:
-        if event == "/jax/core/compile/backend_compile_duration":
+        if event == BACKEND_COMPILE_EVENT:
             compile_s[0] += duration
 
     jax.monitoring.register_event_duration_secs_listener(on_duration)

@@ -31,7 +31,7 @@ _listening = False
 # compile went while other threads compile beside it: XLA ran (a compile, or a load from
 # this cache), and whether it loaded from this cache. An executable JAX keeps in memory
 # reports neither.
-_BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
+BACKEND_COMPILE_EVENT = "/jax/core/compile/backend_compile_duration"
 _this_thread = threading.local()
 
 
@@ -49,7 +49,7 @@ def _count(event: str, **_) -> None:
 
 
 def _count_compile(event: str, duration: float, **_) -> None:
-    if event == _BACKEND_COMPILE:
+    if event == BACKEND_COMPILE_EVENT:
         _this_thread.compiles = getattr(_this_thread, "compiles", 0) + 1
 
 
