@@ -1,11 +1,12 @@
 """Lexicographic sorts of small non-negative integer keys through packed integer keys.
 
-``lax.sort`` with several key operands, or with one key and a stable order, compiles on a GPU
-to a comparison sort (about 40 passes over an 8M-entry list). The keys are instead packed,
+``lax.sort`` with several key operands, or with one signed key and a stable order, compiles on
+a GPU to a comparison sort (about 40 passes over an 8M-entry list). The keys are instead packed,
 with the entry's index as the least significant field, into one int64 (or int32) per entry:
 unique keys of a single operand, which XLA hands to a radix sort; the other operands follow
-through one gather. Keys whose static ranges do not fit 63 bits beside the index are sorted
-one group at a time, least significant first, each pass such a single-operand sort.
+through one gather. Keys that fit 64 bits but not beside the index are one stable sort of the
+packed key with the index as its second operand (``pair_sort``); wider keys are sorted one
+group at a time, least significant first, each pass such a single-operand sort.
 """
 
 from __future__ import annotations
@@ -34,9 +35,12 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     # no stability and sorts one operand. A stable or two-operand sort is not given to the
     # radix sort (XLA's StableSortExpander rewrites its comparator) but to a comparison sort,
     # about 40 passes over an 8M-entry list on a GPU; keys too wide for one packed key are
-    # sorted a group at a time, least significant first (an LSD radix sort over the groups).
+    # sorted a group at a time, least significant first (an LSD radix sort over the groups),
+    # unless they fit one uint64 without the index: see ``pair_sort``.
     idx_bits = max(int(n) - 1, 1).bit_length()
     groups = key_groups(bits, 63 - idx_bits)
+    if len(groups) > 1 and sum(bits) <= 64:
+        return pair_sort(codes, bits, limits, payloads)
     perm = None
     for group in reversed(groups):
         packed = pack([codes[i] if perm is None else codes[i][perm] for i in group],
@@ -52,6 +56,20 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     return out_keys, [p[perm] for p in payloads]
 
 
+def pair_sort(codes, bits, limits, payloads):
+    """``lex_sort`` of keys that fit one uint64 without the entry's index: one stable sort of
+    the packed key carrying the index as its second operand (ties in index order, as the
+    index's place in ``pack`` gives them). Unlike the general stable sort above, this one
+    (unsigned key, an iota beside it) runs as fast as a radix sort on jax 0.11's GPUs: it
+    sorted faster than the two packed-key sorts it replaces (RESULTS.md, thirty-second
+    session)."""
+    packed = pack(codes, bits, 0, unsigned=True)
+    with jax.enable_x64(True):
+        index = jnp.arange(packed.shape[0], dtype=jnp.int32)
+        packed, perm = jax.lax.sort((packed, index), num_keys=1, is_stable=True)
+    return unpack(packed, bits, 0, limits), [p[perm] for p in payloads]
+
+
 def key_groups(bits: Sequence[int], room: int) -> list[list[int]]:
     """Consecutive keys packed together, each group at most ``room`` bits (the last key of a
     group the least significant); the least significant keys fill their group first."""
@@ -65,21 +83,25 @@ def key_groups(bits: Sequence[int], room: int) -> list[list[int]]:
     return groups
 
 
-def pack(codes: Sequence[Array], bits: Sequence[int], idx_bits: int) -> Array:
-    """(code_0 ... code_k, entry index) as one int32 or int64, code_0 most significant."""
+def pack(codes: Sequence[Array], bits: Sequence[int], idx_bits: int,
+         unsigned: bool = False) -> Array:
+    """(code_0 ... code_k, entry index) as one int32 or int64 (uint64 if ``unsigned``), code_0
+    most significant; ``idx_bits`` 0: no index."""
     total = sum(bits) + idx_bits
-    with jax.enable_x64(total > 31):
-        wide = jnp.int64 if total > 31 else jnp.int32
+    with jax.enable_x64(total > 31 or unsigned):
+        wide = jnp.uint64 if unsigned else jnp.int64 if total > 31 else jnp.int32
         packed = jnp.zeros(codes[0].shape, wide)
         for code, b in zip(codes, bits):
             packed = (packed << b) | code.astype(wide)
+        if not idx_bits:
+            return packed
         return (packed << idx_bits) | jnp.arange(codes[0].shape[0], dtype=wide)
 
 
 def unpack(packed: Array, bits: Sequence[int], idx_bits: int, limits) -> list[Array]:
     """The int32 keys of a sorted ``pack``, EMPTY where a code is past its limit."""
     out, shift = [], sum(bits) + idx_bits
-    with jax.enable_x64(packed.dtype == jnp.int64):
+    with jax.enable_x64(packed.dtype.itemsize == 8):
         for lim, b in zip(limits, bits):
             shift -= b
             v = ((packed >> shift) & ((1 << b) - 1)).astype(jnp.int32)

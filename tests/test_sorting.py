@@ -7,6 +7,9 @@ import pytest
 from jaxrender.sorting import EMPTY, lex_sort
 
 
+# At n = 3000 (12 index bits): (3, 100) and (7, 2**20, 2**17) pack beside the index;
+# (2**24, 2**26, 2**5) and (2**20, 2**30) fit a uint64 only without it (``pair_sort``); the
+# others need several packed sorts.
 @pytest.mark.parametrize("limits", [(3, 100), (7, 2**20, 2**17), (2**24, 2**26, 2**5),
                                     (2**31 - 2, 2**31 - 2, 5), (2**30,) * 4, (2**20, 2**30)])
 def test_lex_sort_equals_numpy_lexsort(limits):
