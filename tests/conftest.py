@@ -88,36 +88,36 @@ def _compiled_programs_released():
     memory_maps.release_if_crowded()
 
 
-# The files that take longest on the 2-core CI machine (pytest --durations=0, per-file sums,
-# 2026-12-06; seconds of that run, on a shared machine whose load doubled the first files'
-# times), handed to the xdist workers first: with --dist loadfile a file runs whole on one
-# worker, and a long file dispatched last leaves the other worker idle at the end of the run.
-# Files of 30-50 s that were not listed (test_render.py, test_donate.py, test_tads.py) went
-# out in collection order, after many short ones; test_micro_batch.py (19 s) left the list.
+# The files that take longest on a 2-core machine (per-file sums of the tests' times from
+# pytest's junit report, 2026-12-07, this file's XLA flags, a dev venv: 1,243 s of test time
+# in a 638 s run), handed to the xdist workers first: with --dist loadfile a file runs whole
+# on one worker, and a long file dispatched last leaves the other worker idle at the end of
+# the run. Files under about 18 s go out in collection order.
 LONGEST_FIRST = (
-    "tests/test_installed.py",  # 376 s: the README example in a fresh interpreter, a wheel
-    "tests/pipelines/test_transparency.py",  # 300
-    "tests/pipelines/test_reference.py",  # 284
-    "tests/study/test_sequences.py",  # 116
-    "tests/study/test_time_study.py",  # 81
-    "tests/raster/test_spans.py",  # 74
-    "tests/pipelines/test_forward.py",  # 68
-    "tests/raster/test_multi_sample.py",  # 68
-    "tests/study/test_runner.py",  # 66
-    "tests/shading/test_render.py",  # 50
-    "tests/pipelines/test_vertex_work.py",  # 49
-    "tests/pipelines/test_taa.py",  # 42
-    "tests/pipelines/test_object_space.py",  # 40
-    "tests/pipelines/test_visbuffer.py",  # 38
-    "tests/raster/test_donate.py",  # 37
-    "tests/pipelines/test_transparent_prefix.py",  # 37
-    "tests/pipelines/test_tads.py",  # 35
-    "tests/pipelines/test_dacs.py",  # 33
-    "tests/pipelines/test_checkerboard.py",  # 30
-    "tests/pipelines/test_mitsuba.py",  # 28
-    "tests/pipelines/test_waves_and_worklists.py",  # 27
-    "tests/raster/test_robust.py",  # 26
-    "tests/pipelines/test_os_budget.py",  # 25
+    "tests/pipelines/test_transparency.py",  # 117 s
+    "tests/test_installed.py",  # 113: the README example in a fresh interpreter, a wheel
+    "tests/pipelines/test_reference.py",  # 88
+    "tests/study/test_runner.py",  # 46
+    "tests/raster/test_spans.py",  # 45
+    "tests/raster/test_multi_sample.py",  # 43
+    "tests/study/test_time_study.py",  # 41
+    "tests/pipelines/test_forward.py",  # 40
+    "tests/pipelines/test_taa.py",  # 37
+    "tests/study/test_sequences.py",  # 34
+    "tests/pipelines/test_visbuffer.py",  # 32
+    "tests/pipelines/test_waves_and_worklists.py",  # 32
+    "tests/pipelines/test_transparent_prefix.py",  # 30
+    "tests/pipelines/test_dacs.py",  # 29
+    "tests/pipelines/test_object_space.py",  # 28
+    "tests/raster/test_donate.py",  # 26
+    "tests/pipelines/test_tads.py",  # 26
+    "tests/raster/test_robust.py",  # 21
+    "tests/study/test_devices.py",  # 20
+    "tests/pipelines/test_checkerboard.py",  # 20
+    "tests/shading/test_render.py",  # 20
+    "tests/pipelines/test_os_budget.py",  # 19
+    "tests/pipelines/test_deferred.py",  # 19
+    "tests/pipelines/test_vertex_work.py",  # 18
 )
 
 
