@@ -1,7 +1,15 @@
 #!/usr/bin/env bash
 # Thirty-second session. Call 1, one H100 (RESULTS.md): `gpu_thirty_first.sh pairs dacsprof`.
-# Call 2 (carry [".whl", ".v"]; .v/base: git archive 6b5f13c jaxrender | tar -x -C .v/base):
-#   bash benchmarks/gpu_thirty_second.sh sortcount glassprof targets
+# Call 2 (carry [".whl", ".v"]; .v/base: git archive 6b5f13c jaxrender | tar -x -C .v/base;
+# .v/pairs32: git archive HEAD jaxrender | tar -x -C .v/pairs32 and
+# git apply --directory=.v/pairs32 benchmarks/variants/lex_sort_pairs32.patch):
+#   bash benchmarks/gpu_thirty_second.sh pairs32 sortcount glassprof targets
+# pairs32 (.v/pairs32): keys of at most 32 bits that today pack with the entry's index into an
+#   int64 (forward's quad sort, 19 + 10 + 3 bits on glass; the visibility buffer's two, 27 and
+#   31 bits) sorted as a uint32 key beside an int32 index (pair_sort): half the radix passes.
+#   Side by side with this tree, A B B A, forward and the visibility buffer on glass and
+#   foliage. Prediction: forward 0.1-0.25 ms a frame faster on both scenes, the visibility
+#   buffer 0.05-0.15; same CPU outputs (tests/test_sorting.py with a 32-bit case passes there).
 # sortcount: bench_lex_sort.py in .v/base (two packed int64 sorts) and this tree (pair_sort,
 #   adopted from call 1), now listing every custom-call target: call 1's counter found neither
 #   a sort nor a cub call in either tree's GPU program, so which sort ran was not read.
@@ -13,7 +21,12 @@
 . "$(dirname "$0")/gpu_env.sh"
 on_h200() { nvidia-smi --query-gpu=name --format=csv,noheader | grep -q H200; }
 for part in "$@"; do
-  if [ "$part" = sortcount ]; then
+  if [ "$part" = pairs32 ]; then
+    grep -q narrow .v/pairs32/jaxrender/sorting.py || exit 1
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side pairs32 150 "after pairs32" --scenes glass foliage \
+      --pipelines forward visbuffer
+  elif [ "$part" = sortcount ]; then
     grep -q pair_sort .v/base/jaxrender/sorting.py && exit 1
     for t in base after; do
       if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
