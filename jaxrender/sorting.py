@@ -32,11 +32,11 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     codes = [jnp.where((k < 0) | (k > lim), lim + 1, k) for k, lim in zip(keys, limits)]
     n = keys[0].shape[0]
     # The entry's index is the last key of every sort: keys become unique, so each sort needs
-    # no stability and sorts one operand. A stable or two-operand sort is not given to the
-    # radix sort (XLA's StableSortExpander rewrites its comparator) but to a comparison sort,
-    # about 40 passes over an 8M-entry list on a GPU; keys too wide for one packed key are
-    # sorted a group at a time, least significant first (an LSD radix sort over the groups),
-    # unless they fit one uint64 without the index: see ``pair_sort``.
+    # no stability and sorts one operand. A stable or two-operand sort of a signed key is not
+    # given to the radix sort (XLA's StableSortExpander rewrites its comparator) but to a
+    # comparison sort, about 40 passes over an 8M-entry list on a GPU; keys too wide for one
+    # packed key are sorted a group at a time, least significant first (an LSD radix sort
+    # over the groups), unless they fit one uint64 without the index: see ``pair_sort``.
     idx_bits = max(int(n) - 1, 1).bit_length()
     groups = key_groups(bits, 63 - idx_bits)
     if len(groups) > 1 and sum(bits) <= 64:
@@ -59,10 +59,10 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
 def pair_sort(codes, bits, limits, payloads):
     """``lex_sort`` of keys that fit one uint64 without the entry's index: one stable sort of
     the packed key carrying the index as its second operand (ties in index order, as the
-    index's place in ``pack`` gives them). Unlike the general stable sort above, this one
-    (unsigned key, an iota beside it) runs as fast as a radix sort on jax 0.11's GPUs: it
-    sorted faster than the two packed-key sorts it replaces (RESULTS.md, thirty-second
-    session)."""
+    index's place in ``pack`` gives them). Unlike a stable sort of a signed key, this one
+    (an unsigned key, the index beside it) took less time on an H100 with jax 0.11 than the
+    two packed-key radix sorts it replaces (RESULTS.md, thirty-second session), so it is
+    presumably cub's pairs radix sort; the program text was not read."""
     packed = pack(codes, bits, 0, unsigned=True)
     with jax.enable_x64(True):
         index = jnp.arange(packed.shape[0], dtype=jnp.int32)
