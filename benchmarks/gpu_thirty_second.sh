@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Thirty-second session. Call 1, one H100 (RESULTS.md): `gpu_thirty_first.sh pairs dacsprof`.
-# Call 2 (carry [".whl", ".v"]; .v/base: git archive 6b5f13c jaxrender | tar -x -C .v/base;
-# .v/pairs32: git archive HEAD jaxrender | tar -x -C .v/pairs32 and
+# The session's later tries of this script got no machine (failed starts and refusals used the
+# rest of the budget). Prepared for the next session, one call (carry [".whl", ".v"]; first
+# .v/base: mkdir -p .v/base && git archive 6b5f13c jaxrender | tar -x -C .v/base; and
+# .v/pairs32: mkdir -p .v/pairs32 && git archive HEAD jaxrender | tar -x -C .v/pairs32 &&
 # git apply --directory=.v/pairs32 benchmarks/variants/lex_sort_pairs32.patch):
 #   bash benchmarks/gpu_thirty_second.sh pairs32 sortcount glassprof targets
 # pairs32 (.v/pairs32): keys of at most 32 bits that today pack with the entry's index into an
