@@ -61,10 +61,10 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
 def pair_sort(codes, bits, limits, payloads):
     """``lex_sort`` of keys that fit one uint64 without the entry's index: one stable sort of
     the packed key carrying the index as its second operand (ties in index order, as the
-    index's place in ``pack`` gives them). Unlike the stable sorts of earlier sessions, this one
-    (an unsigned key, the index beside it) took less time on an H100 with jax 0.11 than the
-    two packed-key radix sorts it replaces (RESULTS.md, thirty-second session), so it is
-    presumably cub's pairs radix sort; the program text was not read."""
+    index's place in ``pack`` gives them). On an H100 with jax 0.11 this sort (an unsigned
+    key, the index beside it) took less time than the two packed-key radix sorts it replaces
+    (RESULTS.md), so it is presumably cub's pairs radix sort, where other stable sorts were
+    comparison sorts; the compiled program was not read."""
     packed = pack(codes, bits, 0, unsigned=True)
     with jax.enable_x64(True):
         index = jnp.arange(packed.shape[0], dtype=jnp.int32)
