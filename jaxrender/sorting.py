@@ -1,8 +1,8 @@
 """Lexicographic sorts of small non-negative integer keys through packed integer keys.
 
-``lax.sort`` with several key operands, or with one key and a stable order, compiled on a GPU
-to a comparison sort in earlier sessions' programs (about 40 passes over an 8M-entry list;
-``pair_sort``'s stable sort is the exception measured since). The keys are instead packed,
+``lax.sort`` with several key operands, or with one key and a stable order, has compiled on a
+GPU to a comparison sort (about 40 passes over an 8M-entry list; ``pair_sort``'s stable sort
+is an exception). The keys are instead packed,
 with the entry's index as the least significant field, into one int64 (or int32) per entry:
 unique keys of a single operand, which XLA hands to a radix sort; the other operands follow
 through one gather. Keys that fit 64 bits but not beside the index are one stable sort of the
@@ -33,12 +33,12 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     codes = [jnp.where((k < 0) | (k > lim), lim + 1, k) for k, lim in zip(keys, limits)]
     n = keys[0].shape[0]
     # The entry's index is the last key of every sort: keys become unique, so each sort needs
-    # no stability and sorts one operand. A stable or two-operand sort was not given to the
+    # no stability and sorts one operand. A stable or two-operand sort has not been given to the
     # radix sort (XLA's StableSortExpander rewrites its comparator) but to a comparison sort,
-    # about 40 passes over an 8M-entry list on a GPU (``pair_sort``'s is the exception measured
-    # since); keys too wide for one packed key are sorted a group at a time, least
-    # significant first (an LSD radix sort over the groups), unless they fit one uint64
-    # without the index: see ``pair_sort``.
+    # about 40 passes over an 8M-entry list on a GPU (``pair_sort``'s is an exception); keys
+    # too wide for one packed key are sorted a group at a time, least significant first (an
+    # LSD radix sort over the groups), unless they fit one uint64 without the index: see
+    # ``pair_sort``.
     idx_bits = max(int(n) - 1, 1).bit_length()
     groups = key_groups(bits, 63 - idx_bits)
     if len(groups) > 1 and sum(bits) <= 64:
