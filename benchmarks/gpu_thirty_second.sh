@@ -9,8 +9,8 @@
 # pairs32 (.v/pairs32): keys of at most 32 bits that today pack with the entry's index into an
 #   int64 (forward's quad sort, 19 + 10 + 3 bits on glass; the visibility buffer's two, 27 and
 #   31 bits) sorted as a uint32 key beside an int32 index (pair_sort): half the radix passes.
-#   Side by side with this tree, A B B A, forward and the visibility buffer on glass and
-#   foliage. Prediction: forward 0.1-0.25 ms a frame faster on both scenes, the visibility
+#   The sort bench on forward's quad keys (after, pairs32, after), then side by side with
+#   this tree, A B B A, forward and the visibility buffer on glass and foliage. Prediction: forward 0.1-0.25 ms a frame faster on both scenes, the visibility
 #   buffer 0.05-0.15; same CPU outputs (tests/test_sorting.py with a 32-bit case passes there).
 # sortcount: bench_lex_sort.py in .v/base (two packed int64 sorts) and this tree (pair_sort,
 #   adopted from call 1), now listing every custom-call target: call 1's counter found neither
@@ -30,6 +30,12 @@ on_h200() { nvidia-smi --query-gpu=name --format=csv,noheader | grep -q H200; }
 for part in $(targets_first "$*"); do
   if [ "$part" = pairs32 ]; then
     grep -q narrow .v/pairs32/jaxrender/sorting.py || exit 1
+    for t in after pairs32 after; do
+      if [ $t = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      PYTHONPATH=$R:/tmp/site timeout -k 5 90 python3 -P benchmarks/bench_lex_sort.py \
+        --keys quads 2>&1 | quiet | grep '^|\|^device\|^custom' | sed "s/^/$t: /" \
+        | tee -a "$OUT/pairs32_sort.md"
+    done
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side pairs32 150 "after pairs32" --scenes glass foliage \
       --pipelines forward visbuffer

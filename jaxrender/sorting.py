@@ -42,7 +42,17 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     idx_bits = max(int(n) - 1, 1).bit_length()
     groups = key_groups(bits, 63 - idx_bits)
     if len(groups) > 1 and sum(bits) <= 64:
-        return pair_sort(codes, bits, limits, payloads)
+        # One pairs sort on a GPU (``pair_sort``); XLA:CPU's stable two-operand sort is a
+        # comparison sort, slower there than the packed sorts (RESULTS.md).
+        return jax.lax.platform_dependent(
+            codes, payloads, cuda=lambda c, p: pair_sort(c, bits, limits, p),
+            default=lambda c, p: packed_sorts(c, bits, limits, p, groups, idx_bits))
+    return packed_sorts(codes, bits, limits, payloads, groups, idx_bits)
+
+
+def packed_sorts(codes, bits, limits, payloads, groups, idx_bits):
+    """``lex_sort`` as one single-operand sort of each group's packed key (``key_groups``, the
+    entry's index the least significant field), the last group first."""
     perm = None
     for group in reversed(groups):
         packed = pack([codes[i] if perm is None else codes[i][perm] for i in group],

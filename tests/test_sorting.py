@@ -1,5 +1,8 @@
 """lex_sort against NumPy's lexsort on fresh random keys, packed and unpacked paths."""
 
+import re
+
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -7,24 +10,60 @@ import pytest
 from jaxrender.sorting import EMPTY, lex_sort
 
 
-# At n = 3000 (12 index bits): (3, 100) and (7, 2**20, 2**17) pack beside the index;
-# (2**24, 2**26, 2**5) and (2**20, 2**30) fit a uint64 only without it (``pair_sort``); the
-# others need several packed sorts.
-@pytest.mark.parametrize("limits", [(3, 100), (7, 2**20, 2**17), (2**24, 2**26, 2**5),
-                                    (2**31 - 2, 2**31 - 2, 5), (2**30,) * 4, (2**20, 2**30)])
-def test_lex_sort_equals_numpy_lexsort(limits):
+def random_keys(limits, n=3000):
+    """Keys with ties in [0, limit] (the first 20% EMPTY) and a payload, as NumPy arrays."""
     rng = np.random.default_rng(len(limits) + limits[0] % 97)
-    n = 3000
     keys = [rng.integers(0, min(lim, 50) + 1, n).astype(np.int64) for lim in limits]
     keys[0][rng.random(n) < 0.2] = EMPTY  # unused entries: after every value
-    payload = rng.random((n, 2)).astype(np.float32)
-    got_keys, (got_payload,) = lex_sort([jnp.asarray(k, jnp.int32) for k in keys], limits,
-                                        [jnp.asarray(payload)])
+    return keys, rng.random((n, 2)).astype(np.float32)
+
+
+def assert_lexsorted(got_keys, got_payload, keys, payload, path):
     order = np.lexsort(keys[::-1])  # stable, first key most significant
     for i, (g, k) in enumerate(zip(got_keys, keys)):
-        np.testing.assert_array_equal(np.asarray(g), k[order], err_msg=f"key {i} differs")
+        np.testing.assert_array_equal(np.asarray(g), k[order], err_msg=f"{path}: key {i}")
     np.testing.assert_array_equal(np.asarray(got_payload), payload[order],
-                                  err_msg="payload not carried in the stable order")
+                                  err_msg=f"{path}: payload not carried in the stable order")
+
+
+# At n = 3000 (12 index bits): (3, 100) and (7, 2**20, 2**17) pack beside the index;
+# (2**24, 2**26, 2**5) and (2**20, 2**30) fit a uint64 only without it (``pair_sort`` on a
+# GPU, several packed sorts elsewhere); the others need several packed sorts.
+PAIR_LIMITS = [(2**24, 2**26, 2**5), (2**20, 2**30)]
+
+
+@pytest.mark.parametrize("limits", [(3, 100), (7, 2**20, 2**17), (2**31 - 2, 2**31 - 2, 5),
+                                    (2**30,) * 4, *PAIR_LIMITS])
+def test_lex_sort_equals_numpy_lexsort(limits):
+    keys, payload = random_keys(limits)
+    got_keys, (got_payload,) = lex_sort([jnp.asarray(k, jnp.int32) for k in keys], limits,
+                                        [jnp.asarray(payload)])
+    assert_lexsorted(got_keys, got_payload, keys, payload, "lex_sort")
+
+
+@pytest.mark.parametrize("limits", PAIR_LIMITS)
+def test_pair_sort_equals_numpy_lexsort(limits):
+    """The GPU's path, called directly: on this CPU ``lex_sort`` takes the packed sorts."""
+    from jaxrender.sorting import pair_sort
+
+    keys, payload = random_keys(limits)
+    bits = [(lim + 1).bit_length() for lim in limits]
+    codes = [jnp.asarray(np.where(k > lim, lim + 1, k), jnp.int32) for k, lim in zip(keys, limits)]
+    got_keys, (got_payload,) = pair_sort(codes, bits, limits, [jnp.asarray(payload)])
+    assert_lexsorted(got_keys, got_payload, keys, payload, "pair_sort")
+
+
+@pytest.mark.parametrize("platform, operands", [("cuda", [2]), ("cpu", [1, 1])])
+def test_keys_wider_than_the_index_allows_sort_once_on_a_gpu(platform, operands):
+    """Lowered for each platform: one sort of (key, index) for CUDA, two packed-key sorts of
+    one operand each for the CPU (where the stable two-operand sort is a comparison sort)."""
+    def fn(a, b):
+        return lex_sort((a, b), PAIR_LIMITS[1])
+
+    x = jnp.zeros(3000, jnp.int32)
+    text = jax.jit(fn).trace(x, x).lower(lowering_platforms=(platform,)).as_text()
+    sorts = re.findall(r'"stablehlo.sort"\(([^)]*)\)', text)
+    assert [len(s.split(",")) for s in sorts] == operands, (platform, sorts)
 
 
 def test_key_groups_fill_from_the_least_significant_key():
