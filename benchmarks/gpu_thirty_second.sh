@@ -19,9 +19,9 @@
 # glassprof: deferred and forward on glass, kernels by scope, now that the composite sorts once
 #   (call 1, H100: deferred 2.73-2.84 ms a frame, forward 4.78-4.83): where glass's frame goes.
 # dacskern: DACS on foliage at costs 0 and 256, the 30 longest kernels of its shade scope
-#   with their launches. The thirtieth session's H200 program (cost 256) had 20-27 kernels in
-#   each shade branch, nine of them `surface_points` stacks (concatenate fusions); call 1 here
-#   found 80 more launches at cost 256 than at 0. Which of those kernels exist at cost 0 tells
+#   with their launches. Call 1's H100 program (its dacsdump, cost 256) had 20-27 kernels in
+#   each shade branch, seven of them `surface_points` stacks (concatenate fusions); call 1
+#   here found 80 more launches at cost 256 than at 0. Which of those kernels exist at cost 0 tells
 #   whether the stacks are DACS's fixed cost or the layers' (the store of shared values).
 # targets: every real-time pipeline on glass and room, on an H200 only (the issue's card; run
 #   first there); skipped on an H100, where call 1 measured glass and room side by side.
