@@ -1,13 +1,14 @@
 """Lexicographic sorts of small non-negative integer keys through packed integer keys.
 
 ``lax.sort`` with several key operands, or with one key and a stable order, has compiled on a
-GPU to a comparison sort (about 40 passes over an 8M-entry list; ``pair_sort``'s stable sort
-is an exception). The keys are instead packed,
-with the entry's index as the least significant field, into one int64 (or int32) per entry:
-unique keys of a single operand, which XLA hands to a radix sort; the other operands follow
-through one gather. Keys that fit 64 bits but not beside the index are one stable sort of the
-packed key with the index as its second operand (``pair_sort``); wider keys are sorted one
-group at a time, least significant first, each pass such a single-operand sort.
+GPU to a comparison sort (about 40 passes over an 8M-entry list; XLA's StableSortExpander
+rewrites a stable sort's comparator; ``pair_sort``'s stable sort is an exception). The keys
+are instead packed, with the entry's index as the least significant field, into one int64
+(or int32) per entry: unique keys of a single operand, which need no stability and which XLA
+hands to a radix sort; the other operands follow through one gather. Keys that fit 64 bits
+but not beside the index are one stable sort of the packed key with the index as its second
+operand (``pair_sort``, on CUDA); wider keys are sorted one group at a time, least
+significant first, each pass such a single-operand sort.
 """
 
 from __future__ import annotations
@@ -28,17 +29,11 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     ``payloads`` (arrays with leading axis N). Key i holds values in [0, limits[i]] (static); a
     value outside that range (e.g. EMPTY for an unused entry) sorts after all of them and is
     returned as EMPTY. Returns (sorted keys, sorted payloads)."""
-    keys = [jnp.asarray(k, jnp.int32) for k in keys]
-    bits = [(int(lim) + 1).bit_length() for lim in limits]
-    codes = [jnp.where((k < 0) | (k > lim), lim + 1, k) for k, lim in zip(keys, limits)]
-    n = keys[0].shape[0]
-    # The entry's index is the last key of every sort: keys become unique, so each sort needs
-    # no stability and sorts one operand. A stable or two-operand sort has not been given to the
-    # radix sort (XLA's StableSortExpander rewrites its comparator) but to a comparison sort,
-    # about 40 passes over an 8M-entry list on a GPU (``pair_sort``'s is an exception); keys
-    # too wide for one packed key are sorted a group at a time, least significant first (an
-    # LSD radix sort over the groups), unless they fit one uint64 without the index: see
-    # ``pair_sort``.
+    codes, bits = key_codes(keys, limits)
+    n = codes[0].shape[0]
+    # Keys too wide for one packed key beside the index are sorted a group at a time, least
+    # significant first (an LSD radix sort over the groups), unless they fit one uint64
+    # without the index (``pair_sort``).
     idx_bits = max(int(n) - 1, 1).bit_length()
     groups = key_groups(bits, 63 - idx_bits)
     if len(groups) > 1 and sum(bits) <= 64:
@@ -48,6 +43,14 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
             codes, payloads, cuda=lambda c, p: pair_sort(c, bits, limits, p),
             default=lambda c, p: packed_sorts(c, bits, limits, p, groups, idx_bits))
     return packed_sorts(codes, bits, limits, payloads, groups, idx_bits)
+
+
+def key_codes(keys: Sequence[Array], limits: Sequence[int]) -> tuple[list[Array], list[int]]:
+    """(each key as int32 with a value outside [0, limit] replaced by limit + 1, each key's
+    bit width: enough for limit + 1)."""
+    keys = [jnp.asarray(k, jnp.int32) for k in keys]
+    bits = [(int(lim) + 1).bit_length() for lim in limits]
+    return [jnp.where((k < 0) | (k > lim), lim + 1, k) for k, lim in zip(keys, limits)], bits
 
 
 def packed_sorts(codes, bits, limits, payloads, groups, idx_bits):

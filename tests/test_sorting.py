@@ -44,11 +44,10 @@ def test_lex_sort_equals_numpy_lexsort(limits):
 @pytest.mark.parametrize("limits", PAIR_LIMITS)
 def test_pair_sort_equals_numpy_lexsort(limits):
     """The GPU's path, called directly: on this CPU ``lex_sort`` takes the packed sorts."""
-    from jaxrender.sorting import pair_sort
+    from jaxrender.sorting import key_codes, pair_sort
 
     keys, payload = random_keys(limits)
-    bits = [(lim + 1).bit_length() for lim in limits]
-    codes = [jnp.asarray(np.where(k > lim, lim + 1, k), jnp.int32) for k, lim in zip(keys, limits)]
+    codes, bits = key_codes(keys, limits)
     got_keys, (got_payload,) = pair_sort(codes, bits, limits, [jnp.asarray(payload)])
     assert_lexsorted(got_keys, got_payload, keys, payload, "pair_sort")
 
