@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Thirty-third session, one call (carry [".whl", ".v"]; build .v first, as gpu_thirty_second.sh's
+# header says, and .v/dacs_unroll: mkdir -p .v/dacs_unroll && git archive HEAD jaxrender |
+# tar -x -C .v/dacs_unroll && git apply --directory=.v/dacs_unroll
+# benchmarks/variants/dacs_unrolled.patch):
+#   bash benchmarks/gpu_thirty_third.sh dacsunroll pairs32 sortcount dacskern glassprof targets
+# dacsunroll (.v/dacs_unroll): DACS's steps unrolled in Python instead of a fori_loop, one step
+#   a level, each sized to its own level (a screen of entries decided, not 1.5) and without the
+#   loop's host read per step. Side by side with this tree, A B B A, on foliage, room and
+#   glass. On the CPU (640x360, 4 frames, this machine's 2 cores) it took 53.8 and 77.7 ms a
+#   frame against 59.4 and 83.5 on foliage and room, and compiled in 45 and 61 s against 27
+#   and 28. Prediction: 0.15-0.35 ms a frame faster, compile 1.5-2.5x longer.
+# The other parts are gpu_thirty_second.sh's (targets runs first on an H200, skipped on an H100).
+. "$(dirname "$0")/gpu_env.sh"
+for part in $(targets_first "$*"); do
+  if [ "$part" = dacsunroll ]; then
+    grep -q "Unrolled" .v/dacs_unroll/jaxrender/pipelines/dacs.py || exit 1
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side dacsunroll 170 "after dacs_unroll" --scenes foliage room glass --pipelines dacs
+  else
+    NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_second.sh "$part"
+  fi
+  bundle_out
+done
+exit 0
