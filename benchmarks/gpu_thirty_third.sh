@@ -25,6 +25,12 @@ for part in $(targets_first "$*"); do
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side dacsunroll 150 "after dacs_unroll gbrow" --scenes foliage glass \
       --pipelines dacs
+  elif [ "$part" = dacsquick ]; then
+    # dacsunroll on foliage alone, for a call with little device time left.
+    grep -q "Unrolled" .v/dacs_unroll/jaxrender/pipelines/dacs.py || exit 1
+    grep -q "materialize_all(\*gbuffer" .v/gbrow/jaxrender/pipelines/gbuffer.py || exit 1
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side dacsquick 100 "after gbrow dacs_unroll" --scenes foliage --pipelines dacs
   else
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_second.sh "$part"
   fi
