@@ -36,7 +36,9 @@ if not any((Path(p) / "jaxrender").is_dir()
            for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p):
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from jaxrender.parsing import parse_settings, parse_spec, resolution_arg  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # its sibling, profile_kernels
+from jaxrender.parsing import resolution_arg  # noqa: E402
+from profile_kernels import pipeline_case  # noqa: E402
 
 TARGETS = Path(__file__).resolve().parent / "targets"
 # Instructions that launch nothing: values, tuples, views and the control flow itself.
@@ -105,21 +107,12 @@ def compile_only_sharding(target: Path):
     return jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec())
 
 
-def program_text(what: str, scene_spec: str, width: int, height: int, overrides: dict,
-                 shader_cost: int | None, target: Path) -> str:
-    """The optimized HLO text of ``what``'s images-only program on one frame of the scene,
+def program_text(scene, camera, pipe, cfg, target: Path) -> str:
+    """The optimized HLO text of ``pipe``'s images-only program on one frame of the scene,
     compiled for ``target``'s card."""
-    from jaxrender.pipelines import get_pipeline, make_config, program
-    from jaxrender.scene import default_camera
-    from jaxrender.shading import load_lit_scene
+    from jaxrender.pipelines import program
 
-    name, params = parse_spec(scene_spec, "--scene")
-    if shader_cost is not None:
-        params["effects"] = {**params.get("effects", {}), "shader_cost": shader_cost}
-    scene = load_lit_scene(name, **params)
-    cfg = make_config(what, width=width, height=height, **overrides)
-    fixed, args, _ = program.arguments(get_pipeline(what), scene, default_camera(scene), cfg,
-                                       outputs="images")
+    fixed, args, _ = program.arguments(pipe, scene, camera, cfg, outputs="images")
     sharding = compile_only_sharding(target)
     abstract = jax.tree.map(
         lambda a: jax.ShapeDtypeStruct(a.shape, a.dtype, sharding=sharding)
@@ -141,14 +134,14 @@ def main(argv=None) -> int:
     ap.add_argument("--dump", type=Path, default=None, help="write the optimized HLO here")
     a = ap.parse_args(argv)
     w, h = a.resolution
-    text = program_text(a.what, a.scene, w, h, parse_settings(a.set, "--set"), a.shader_cost,
-                        a.target)
+    scene, camera, pipe, cfg, label = pipeline_case(a.what, a.scene, w, h, a.set,
+                                                    a.shader_cost)
+    text = program_text(scene, camera, pipe, cfg, a.target)
     if a.dump:
         a.dump.write_text(text)
     rows = launches(text)
     total = sum((k for _, _, k in rows), collections.Counter())
-    cost = "" if a.shader_cost is None else f" shader_cost={a.shader_cost}"
-    print(f"{a.what} {a.scene}{cost} {w}x{h} {' '.join(a.set)} on {a.target.stem} "
+    print(f"{label} on {a.target.stem} "
           f"(jax {jax.__version__}): {sum(total.values())} launching instructions in "
           f"{len(rows)} control computations, {dict(total.most_common())}")
     print("| launches | role | computation | by opcode |\n|---:|---|---|---|")

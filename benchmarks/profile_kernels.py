@@ -171,6 +171,25 @@ def device_span_ms(events, calls: int) -> float:
     return float(np.median(spans)) / 1e3
 
 
+def pipeline_case(what: str, scene_spec: str, width: int, height: int, settings: list[str],
+                  shader_cost: int | None):
+    """(scene, its default camera, pipeline, config, label) of a command line's pipeline
+    ``what`` on ``scene_spec`` (``--scene``), ``settings`` its ``--set KEY=VALUE`` overrides
+    and ``shader_cost`` the scene's (None: its own)."""
+    from jaxrender.pipelines import get_pipeline, make_config
+    from jaxrender.scene import default_camera
+    from jaxrender.shading import load_lit_scene
+
+    name, params = parse_spec(scene_spec, "--scene")
+    if shader_cost is not None:
+        params["effects"] = {**params.get("effects", {}), "shader_cost": shader_cost}
+    scene = load_lit_scene(name, **params)
+    cfg = make_config(what, width=width, height=height, **parse_settings(settings, "--set"))
+    cost = "" if shader_cost is None else f" shader_cost={shader_cost}"
+    label = f"{what} {scene_spec}{cost} {width}x{height} {' '.join(settings)}"
+    return scene, default_camera(scene), get_pipeline(what), cfg, label
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("what", help="'raster' or a pipeline name (forward, deferred, ...)")
@@ -208,20 +227,8 @@ def main(argv=None) -> int:
         profile_call(fn, clip, faces, calls=args.calls, top=args.top,
                      label=f"raster {w}x{h} {faces.shape[0]} triangles ({args.traversal})")
         return 0
-    from jaxrender.pipelines import get_pipeline, make_config
-    from jaxrender.scene import default_camera
-    from jaxrender.shading import load_lit_scene
-
-    name, params = parse_spec(args.scene, "--scene")
-    if args.shader_cost is not None:
-        params["effects"] = {**params.get("effects", {}), "shader_cost": args.shader_cost}
-    sc = load_lit_scene(name, **params)
-    cam = default_camera(sc)
-    pipe = get_pipeline(args.what)
-    overrides = parse_settings(args.set, "--set")
-    cfg = make_config(args.what, width=w, height=h, **overrides)
-    cost = "" if args.shader_cost is None else f" shader_cost={args.shader_cost}"
-    label = f"{args.what} {args.scene}{cost} {w}x{h} {' '.join(args.set)}"
+    sc, cam, pipe, cfg, label = pipeline_case(args.what, args.scene, w, h, args.set,
+                                              args.shader_cost)
     scopes = tuple(args.scope)
     if args.frames:
         from jaxrender.scene.camera_path import stack
