@@ -36,7 +36,10 @@ def lex_sort(keys: Sequence[Array], limits: Sequence[int], payloads: Sequence[Ar
     # without the index (``pair_sort``).
     idx_bits = max(int(n) - 1, 1).bit_length()
     groups = key_groups(bits, 63 - idx_bits)
-    if len(groups) > 1 and sum(bits) <= 64:
+    # Keys of at most 32 bits whose index would widen the packed key to an int64: a uint32
+    # key beside an int32 index is half the radix passes of one int64 key.
+    narrow = sum(bits) <= 32 < sum(bits) + idx_bits
+    if narrow or (len(groups) > 1 and sum(bits) <= 64):
         # One pairs sort on a GPU (``pair_sort``); XLA:CPU's stable two-operand sort is a
         # comparison sort, slower there than the packed sorts (RESULTS.md).
         return jax.lax.platform_dependent(
@@ -72,12 +75,13 @@ def packed_sorts(codes, bits, limits, payloads, groups, idx_bits):
 
 
 def pair_sort(codes, bits, limits, payloads):
-    """``lex_sort`` of keys that fit one uint64 without the entry's index: one stable sort of
-    the packed key carrying the index as its second operand (ties in index order, as the
-    index's place in ``pack`` gives them). On an H100 with jax 0.11 this sort (an unsigned
-    key, the index beside it) took less time than the two packed-key radix sorts it replaces
-    (RESULTS.md), so it is presumably cub's pairs radix sort, where other stable sorts were
-    comparison sorts; the compiled program was not read."""
+    """``lex_sort`` of keys that fit one uint64 (or uint32) without the entry's index but not
+    one int64 (int32) beside it: one stable sort of the packed key carrying the index as its
+    second operand (ties in index order, as the index's place in ``pack`` gives them). On an
+    H100 with jax 0.11 this sort (an unsigned key, the index beside it) took less time than
+    the two packed-key radix sorts it replaces (RESULTS.md), so it is presumably cub's pairs
+    radix sort, where other stable sorts were comparison sorts; the compiled program was not
+    read."""
     packed = pack(codes, bits, 0, unsigned=True)
     with jax.enable_x64(True):
         index = jnp.arange(packed.shape[0], dtype=jnp.int32)
@@ -100,11 +104,14 @@ def key_groups(bits: Sequence[int], room: int) -> list[list[int]]:
 
 def pack(codes: Sequence[Array], bits: Sequence[int], idx_bits: int,
          unsigned: bool = False) -> Array:
-    """(code_0 ... code_k, entry index) as one int32 or int64 (uint64 if ``unsigned``), code_0
-    most significant; ``idx_bits`` 0: no index."""
+    """(code_0 ... code_k, entry index) as one int32 or int64 (uint32 or uint64 if
+    ``unsigned``), code_0 most significant; ``idx_bits`` 0: no index."""
     total = sum(bits) + idx_bits
-    with jax.enable_x64(total > 31 or unsigned):
-        wide = jnp.uint64 if unsigned else jnp.int64 if total > 31 else jnp.int32
+    if unsigned:
+        wide = jnp.uint32 if total <= 32 else jnp.uint64
+    else:
+        wide = jnp.int32 if total <= 31 else jnp.int64
+    with jax.enable_x64(jnp.dtype(wide).itemsize == 8):
         packed = jnp.zeros(codes[0].shape, wide)
         for code, b in zip(codes, bits):
             packed = (packed << b) | code.astype(wide)

@@ -59,11 +59,10 @@ class DacsConfig(BlendingConfig):
     each warp searches per level. border: ``average`` or ``shade`` pixels that lack a complete
     opposite pair of parents inside the image (see the module docstring); when width - 1 and
     height - 1 are multiples of the spacing every pixel has such a pair, and a non-default
-    border is refused. chunk (see PipelineConfig; 0: 4096 lanes; each step of the levels' loop,
-    a level or a piece of one, is one launch of the fewest power-of-two number of chunks that
-    holds its list) is not output-neutral here: the
-    counts ``dispatch_lanes`` (chunks x chunk launched) and ``dispatch_chunks`` are read off
-    it."""
+    border is refused. chunk (see PipelineConfig; 0: 4096 lanes; each level is one launch of
+    the fewest power-of-two number of chunks that holds its list) is not output-neutral here:
+    the counts ``dispatch_lanes`` (chunks x chunk launched) and ``dispatch_chunks`` are read
+    off it."""
 
     threshold: float = 0.01
     spacing: int = 4
@@ -119,41 +118,22 @@ def _parents(idx: np.ndarray, level: int, h: int, w: int, spacing: int):
     return pidx.astype(np.int32), ins, wts.astype(np.float32), np.any(pair_ok, axis=1)
 
 
-# The levels run as steps of one loop, a step's tables sized to its largest: each level is cut
-# into pieces of at most 1 / LARGEST_LEVEL_STEPS of the largest level (half the pixels at
-# spacing 4), so with 2 the five levels' six steps decide over 1.5 screens of entries, where one
-# step a level, each padded to the largest, decided over 2.5. The pieces of one level are
-# independent: every parent lies on an earlier level.
-LARGEST_LEVEL_STEPS = 2
-
-
-def level_tables(h: int, w: int, spacing: int, largest_steps: int = LARGEST_LEVEL_STEPS) -> dict:
-    """Static tables of the loop's steps, each a piece of one level (``steps``: (level, first,
-    stop) of ``level_pixels``), padded to the largest piece (n entries): ``pix`` int32[S, n],
-    ``live`` bool[S, n], parents ``pidx`` int32[S, n, 4], ``ins`` bool[S, n, 4], averaging
-    ``wts`` float32[S, n, 4], ``cnt`` float32[S, n] (parents inside, at least 1), ``pair``
-    bool[S, n] (a complete opposite pair is inside; level 0: True), ``level`` int32[S], and
-    ``sizes`` (pixels per level)."""
-    per = level_pixels(h, w, spacing)
-    piece = max(-(-max(len(p) for p in per) // int(largest_steps)), 1)
-    steps = [(level, a, min(a + piece, len(idx)))
-             for level, idx in enumerate(per) for a in range(0, len(idx), piece)]
-    n_s = len(steps)
-    t = {"pix": np.zeros((n_s, piece), np.int32), "live": np.zeros((n_s, piece), bool),
-         "pidx": np.zeros((n_s, piece, 4), np.int32), "ins": np.zeros((n_s, piece, 4), bool),
-         "wts": np.zeros((n_s, piece, 4), np.float32), "pair": np.ones((n_s, piece), bool),
-         "level": np.asarray([lv for lv, _, _ in steps], np.int32),
-         "sizes": [len(p) for p in per], "steps": steps}
-    for k, (level, a, b) in enumerate(steps):
-        idx = per[level][a:b]
-        t["pix"][k, :b - a] = idx
-        t["live"][k, :b - a] = True
+def level_tables(h: int, w: int, spacing: int) -> list[dict]:
+    """Static tables of each level's pixels (``level_pixels``), one dict a level, each sized to
+    its own n pixels: ``pix`` int32[n], parents ``pidx`` int32[n, 4], ``ins`` bool[n, 4],
+    averaging ``wts`` float32[n, 4], ``cnt`` float32[n] (parents inside, at least 1) and ``pair``
+    bool[n] (a complete opposite pair is inside; level 0: True)."""
+    tables = []
+    for level, idx in enumerate(level_pixels(h, w, spacing)):
+        n = len(idx)
+        t = {"pix": np.asarray(idx, np.int32), "pidx": np.zeros((n, 4), np.int32),
+             "ins": np.zeros((n, 4), bool), "wts": np.zeros((n, 4), np.float32),
+             "pair": np.ones((n,), bool)}
         if level > 0:
-            pidx, ins, wts, pair = _parents(idx, level, h, w, spacing)
-            t["pidx"][k, :b - a], t["ins"][k, :b - a], t["wts"][k, :b - a] = pidx, ins, wts
-            t["pair"][k, :b - a] = pair
-    t["cnt"] = np.maximum(t["ins"].sum(axis=2), 1).astype(np.float32)
-    return t
+            t["pidx"], t["ins"], t["wts"], t["pair"] = _parents(idx, level, h, w, spacing)
+        t["cnt"] = np.maximum(t["ins"].sum(axis=1), 1).astype(np.float32)
+        tables.append(t)
+    return tables
 
 
 def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, covered: Array,
@@ -164,60 +144,62 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
 
     ``shade_fn(pixels int32[c], live bool[c]) -> float32[c, 3]`` shades flat pixel indices;
     ``ids`` int32[H, W] surface ids (-1 uncovered); ``covered`` bool[H, W] (uncovered pixels are
-    never shaded and come out 0); ``border`` as DacsConfig. The levels run in a ``fori_loop``
-    (one copy of the shader in the program), a step for each piece of a level
-    (``level_tables``); each step compacts its pixels to shade into a work list and dispatches
-    it in chunks.
+    never shaded and come out 0); ``border`` as DacsConfig. The levels run one after another,
+    unrolled in the program, each over its own pixels (``level_tables``): a level's pixels are
+    independent, as every parent lies on an earlier level. Each level compacts its pixels to
+    shade into a work list and dispatches it in chunks.
     Returns (image float32[H, W, 3], shaded bool[H, W], level int32[H, W], counts)."""
     h, w = ids.shape
     n_pix = h * w
-    tab = level_tables(h, w, spacing, LARGEST_LEVEL_STEPS)
-    n_steps, piece = tab["pix"].shape
     ids_f = ids.reshape(-1)
     cov_f = covered.reshape(-1)
     thr = jnp.asarray(threshold, jnp.float32)
-    t = {k: jnp.asarray(v) for k, v in tab.items() if k not in ("sizes", "steps")}
-    # Each step is one launch of the fewest power-of-two MIN_CHUNK-lane chunks that hold its
+    # Each level is one launch of the fewest power-of-two MIN_CHUNK-lane chunks that hold its
     # list (dispatch's "switch"): a loop of such chunks paid a host round trip per chunk (40-73
     # a frame), and a loop of the largest level's size (65536 lanes at 1920x1080) launched
     # four times the lanes DACS shades; benchmarks/RESULTS.md, ninth and twelfth sessions.
     level_chunk = int(chunk) if int(chunk) > 0 else dispatch.MIN_CHUNK  # run() caps it at the list
 
-    def step_body(step, carry):
-        img, needs, inv, lanes, chunks = carry
-        pix, live, level = t["pix"][step], t["live"][step], t["level"][step]
-        pidx, ins, wts = t["pidx"][step], t["ins"][step], t["wts"][step]
+    def level_pass(level, tables, img):
+        # Unrolled rather than a loop over steps padded to one size: on a GPU a loop reads back
+        # to the host every iteration and decides over the padding too.
+        pix, pidx, ins, wts, cnt, pair = (
+            jnp.asarray(tables[key]) for key in ("pix", "pidx", "ins", "wts", "cnt", "pair"))
         c = img[pidx]  # [n, 4, 3] parents, final from earlier levels
         with jax.named_scope("decide"):
             id_diff = any_small(ins & (ids_f[pidx] != ids_f[pix][:, None]), axis=1)
             lum = luma(c, luma_kind, space)  # [n, 4]
             insf = ins.astype(jnp.float32)
-            mean = sum_small(insf * lum, axis=1) / t["cnt"][step]
-            var = sum_small(insf * (lum - mean[:, None]) ** 2, axis=1) / t["cnt"][step]
-            cov = cov_f[pix] & live
-            no_pair = ~t["pair"][step] if border == "shade" else jnp.zeros_like(cov)
+            mean = sum_small(insf * lum, axis=1) / cnt
+            var = sum_small(insf * (lum - mean[:, None]) ** 2, axis=1) / cnt
+            cov = cov_f[pix]
+            no_pair = ~pair if border == "shade" else jnp.zeros_like(cov)
             need = cov & ((level == 0) | no_pair | id_diff | (var >= thr))
         with jax.named_scope("interpolate"):
             interp = sum_small(wts[:, :, None] * c, axis=1)
             val = jnp.where((cov & ~need)[:, None], interp, 0.0)
-            img = img.at[jnp.where(live, pix, n_pix)].set(val, mode="drop")
+            img = img.at[pix].set(val, unique_indices=True)
         with jax.named_scope("shade"):
             listed = dispatch.WorkList.of(need)
             img, work = dispatch.run(dispatch.WorkList(pix[listed.items], listed.count),
                                      shade_fn, img, level_chunk, default_mode="switch")
-        needs = needs.at[step].set(need)
-        return (img, needs, inv + work.invocations, lanes + work.lanes, chunks + work.chunks)
+        return img, need, work
 
-    z = jnp.int32(0)
-    init = (jnp.zeros((n_pix, 3), jnp.float32), jnp.zeros((n_steps, piece), bool), z, z, z)
-    img, needs, inv, lanes, chunks = jax.lax.fori_loop(0, n_steps, step_body, init)
-    by_level = [[needs[k, :b - a] for k, (lv, a, b) in enumerate(tab["steps"]) if lv == level]
-                for level in range(len(tab["sizes"]))]
-    warp = dacs_warp.simulate([jnp.concatenate(parts) if parts else jnp.zeros((0,), bool)
-                               for parts in by_level], warp_width, warp_batches)
-    # Every pixel is in exactly one level: the live indices are unique (padding is dropped).
-    shaded = jnp.zeros((n_pix,), bool).at[jnp.where(t["live"], t["pix"], n_pix)].set(
-        needs, mode="drop", unique_indices=True)
+    tables = level_tables(h, w, spacing)
+    img = jnp.zeros((n_pix, 3), jnp.float32)
+    needs, inv, lanes, chunks = [], jnp.int32(0), jnp.int32(0), jnp.int32(0)
+    for level, level_tab in enumerate(tables):
+        if len(level_tab["pix"]) == 0:  # an image too small for this level
+            needs.append(jnp.zeros((0,), bool))
+            continue
+        img, need, work = level_pass(level, level_tab, img)
+        needs.append(need)
+        inv, lanes, chunks = inv + work.invocations, lanes + work.lanes, chunks + work.chunks
+    warp = dacs_warp.simulate(needs, warp_width, warp_batches)
+    # Every pixel is in exactly one level.
+    all_pix = np.concatenate([t["pix"] for t in tables])
+    shaded = jnp.zeros((n_pix,), bool).at[all_pix].set(jnp.concatenate(needs),
+                                                        unique_indices=True)
     counts = {"shade_invocations": inv, "dispatch_lanes": lanes, "dispatch_chunks": chunks,
               "covered_pixels": jnp.sum(covered, dtype=jnp.int32), **warp}
     level = jnp.asarray(level_map(h, w, spacing))

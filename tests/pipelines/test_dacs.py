@@ -160,21 +160,17 @@ def test_borders_and_odd_sizes_are_finite(w, h, spacing):
     assert img.min() >= image.min() and img.max() <= image.max()
 
 
-def test_each_step_is_one_launch_of_a_power_of_two_number_of_chunks():
-    # Steps need different numbers of 64-lane chunks here; each launches the fewest power of
+def test_each_level_is_one_launch_of_a_power_of_two_number_of_chunks():
+    # Levels need different numbers of 64-lane chunks here; each launches the fewest power of
     # two of them that holds its list (dispatch's "switch"), read off its own decisions. The
-    # levels have 384, 384, 768, 1536 and 3072 pixels: the last runs as two steps of 1536,
-    # its pixels in raster order (LARGEST_LEVEL_STEPS = 2).
-    assert dacs_mod.LARGEST_LEVEL_STEPS == 2
+    # levels have 384, 384, 768, 1536 and 3072 pixels.
     rng = np.random.default_rng(7)
     image = rng.uniform(0.0, 1.0, (64, 96, 3)).astype(np.float32)
     image[:, :40] = 0.5  # flat on the left: fewer of its pixels need shading
     _, shaded, counts = _lookup(image, 0.002)
     levels = level_map(64, 96, 4)
-    need = [int(np.sum(shaded & (levels == k))) for k in range(n_levels(4) - 1)]
-    last = shaded[levels == n_levels(4) - 1]  # raster order
-    assert last.size == 3072
-    need += [int(last[:1536].sum()), int(last[1536:].sum())]
+    assert [int(np.sum(levels == k)) for k in range(n_levels(4))] == [384, 384, 768, 1536, 3072]
+    need = [int(np.sum(shaded & (levels == k))) for k in range(n_levels(4))]
     chunks = [-(-n // 64) for n in need]
     launched = [0 if c == 0 else 1 << (c - 1).bit_length() for c in chunks]
     assert len(set(chunks)) > 2 and launched != chunks, f"the case rounds up: {chunks}"
@@ -184,35 +180,53 @@ def test_each_step_is_one_launch_of_a_power_of_two_number_of_chunks():
     assert int(counts["dispatch_lanes"]) < 2 * 64 * sum(chunks)
 
 
-@pytest.mark.parametrize("spacing", [4, 8])
-def test_the_levels_cut_into_steps_decide_and_reconstruct_as_whole_levels(monkeypatch, spacing):
-    """A level's pixels are independent (their parents lie on earlier levels), so cutting the
-    levels into more loop steps changes nothing but the launches: the same image bit for bit,
-    the same pixels shaded, the same counts but the launches', on a random image with object
-    ids."""
-    rng = np.random.default_rng(spacing)
-    h, w = 37, 53
-    image = rng.uniform(0.0, 1.0, (h, w, 3)).astype(np.float32)
-    ids = (rng.random((h, w)) < 0.05).astype(np.int32)
-    runs = {}
-    for steps in (1, 2, 5):
-        monkeypatch.setattr(dacs_mod, "LARGEST_LEVEL_STEPS", steps)
-        img, shaded, _, counts = dacs_mod.dacs_reconstruct(
-            lambda items, live: jnp.asarray(image).reshape(-1, 3)[items], jnp.asarray(ids),
-            jnp.ones((h, w), bool), jnp.float32(0.01), chunk=64, spacing=spacing)
-        runs[steps] = (np.asarray(img), np.asarray(shaded), counts)
-    img1, shaded1, counts1 = runs[1]
-    assert 0 < shaded1.sum() < h * w, "the case shades some pixels and interpolates others"
-    n_steps = [len(dacs_mod.level_tables(h, w, spacing, k)["steps"]) for k in (1, 2, 5)]
-    assert n_steps[0] == n_levels(spacing) and n_steps[0] < n_steps[1] < n_steps[2], n_steps
-    for steps in (2, 5):
-        img, shaded, counts = runs[steps]
-        np.testing.assert_array_equal(img, img1, err_msg=f"{steps} steps of the largest level")
-        np.testing.assert_array_equal(shaded, shaded1, err_msg=f"{steps} steps: shaded")
-        for key in counts1:  # the warp simulation's and the shading's; not the launches'
-            if key not in ("dispatch_lanes", "dispatch_chunks"):
-                np.testing.assert_array_equal(np.asarray(counts[key]), np.asarray(counts1[key]),
-                                              err_msg=f"{steps} steps: {key}")
+def _srgb(c):
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
+
+
+def _numpy_dacs(image, ids, threshold, spacing, border):
+    """DACS by its rules, level by level and pixel by pixel, in float64: level 0 shaded; a
+    later pixel shaded where a parent inside has another id, the parents' display luma varies
+    by at least the threshold, or (border "shade") no opposite pair of parents is inside;
+    else the mean of its complete opposite pairs (of the parents inside, if none is)."""
+    h, w = ids.shape
+    out = np.zeros((h, w, 3))
+    shaded = np.zeros((h, w), bool)
+    for level, pixels in enumerate(level_pixels(h, w, spacing)):
+        for p in pixels:
+            y, x = divmod(int(p), w)
+            if level == 0:
+                out[y, x], shaded[y, x] = image[y, x], True
+                continue
+            pairs = [[(y + dy, x + dx) for dy, dx in pair] for pair in parent_pairs(level, spacing)]
+            inside = [(py, px) for pair in pairs for py, px in pair if 0 <= py < h and 0 <= px < w]
+            complete = [q for pair in pairs if all(0 <= a < h and 0 <= b < w for a, b in pair)
+                        for q in pair]
+            lum = [float(_srgb(np.clip(out[q], 0, 1)) @ [0.25, 0.5, 0.25]) for q in inside]
+            need = (np.var(lum) >= threshold or any(ids[q] != ids[y, x] for q in inside)
+                    or (border == "shade" and not complete))
+            if need:
+                out[y, x], shaded[y, x] = image[y, x], True
+            else:
+                out[y, x] = np.mean([out[q] for q in (complete or inside)], axis=0)
+    return out, shaded
+
+
+@pytest.mark.parametrize("w,h,spacing,border", [(53, 38, 4, "average"), (53, 38, 4, "shade"),
+                                                (29, 22, 8, "average")])
+def test_levels_decide_and_reconstruct_as_a_numpy_reference(w, h, spacing, border):
+    rng = np.random.default_rng(w + h + spacing)
+    # Smooth with noise: some parents' luma varies past the threshold, some does not.
+    y, x = np.mgrid[0:h, 0:w]
+    base = 0.5 + 0.4 * np.sin(x / 7.0)[..., None] * np.cos(y / 5.0)[..., None]
+    image = np.clip(base + rng.normal(0, 0.04, (h, w, 3)), 0, 1.2).astype(np.float32)
+    ids = (rng.random((h, w)) < 0.03).astype(np.int32)
+    img, shaded, counts = _lookup(image, 0.002, ids=ids, spacing=spacing, border=border)
+    want, want_shaded = _numpy_dacs(image.astype(np.float64), ids, 0.002, spacing, border)
+    assert 0.1 < want_shaded.mean() < 0.9, "the case shades some pixels and interpolates others"
+    np.testing.assert_array_equal(shaded, want_shaded, err_msg="pixels shaded")
+    np.testing.assert_allclose(img, want, rtol=1e-5, atol=1e-6, err_msg="reconstructed image")
+    assert int(counts["shade_invocations"]) == int(want_shaded.sum())
 
 
 def test_warp_simulation_counts():
