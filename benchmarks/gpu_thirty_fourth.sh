@@ -18,6 +18,11 @@ for part in $*; do
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 330 $S --scenes glass room --pipelines deferred \
       forward checkerboard dacs visbuffer object_space tads --json "$OUT/targets.json" 2>&1 \
       | quiet | grep '^|' | tee -a "$OUT/targets.md"
+  elif [ "$part" = uniq ]; then
+    grep -q "sentinel + lanes" .v/uniq/jaxrender/pipelines/dispatch.py || exit 1
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side uniq 150 "after uniq" --scenes glass foliage --pipelines forward deferred \
+      object_space visbuffer
   elif [ "$part" = fwdprof ]; then
     prof forward glass 120 fragments alpha_test depth_test quads shade resolve counts \
       transparent composite sorted_blend
