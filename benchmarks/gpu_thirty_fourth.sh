@@ -23,6 +23,13 @@ for part in $*; do
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side uniq 150 "after uniq" --scenes glass foliage --pipelines forward deferred \
       object_space visbuffer
+  elif [ "$part" = switchenv ]; then
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    for mode in blocks switch switch blocks; do
+      JAXRENDER_DISPATCH=$mode PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 $S --scenes glass \
+        foliage --pipelines forward object_space --json "$OUT/switchenv_$mode.json" 2>&1 \
+        | quiet | grep '^|' | sed "s/^/$mode: /" | tee -a "$OUT/switchenv.md"
+    done
   elif [ "$part" = fwdprof ]; then
     prof forward glass 120 fragments alpha_test depth_test quads shade resolve counts \
       transparent composite sorted_blend
