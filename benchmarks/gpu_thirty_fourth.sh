@@ -30,6 +30,10 @@ for part in $*; do
         foliage --pipelines forward object_space --json "$OUT/switchenv_$mode.json" 2>&1 \
         | quiet | grep '^|' | sed "s/^/$mode: /" | tee -a "$OUT/switchenv.md"
     done
+  elif [ "$part" = dacsparents ]; then
+    grep -q level_tables .v/tables/jaxrender/pipelines/dacs.py || exit 1
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side dacsparents 80 "after tables" --scenes foliage --pipelines dacs
   elif [ "$part" = fwdprof ]; then
     prof forward glass 120 fragments alpha_test depth_test quads shade resolve counts \
       transparent composite sorted_blend

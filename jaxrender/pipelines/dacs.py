@@ -99,41 +99,24 @@ class DacsConfig(BlendingConfig):
                              f"opposite pair of parents inside the image")
 
 
-def _parents(idx: np.ndarray, level: int, h: int, w: int, spacing: int):
-    """Static parents of the flat pixels ``idx``: indices int[n, 4] (clamped), inside bool[n, 4],
-    averaging weights float32[n, 4] over the opposite pairs lying wholly inside (else over the
-    parents inside), and ``has_pair`` bool[n] (a complete opposite pair is inside)."""
-    y, x = idx // w, idx % w
-    pairs = parent_pairs(level, spacing)
-    offs = [o for pair in pairs for o in pair]
-    py = np.stack([y + dy for dy, _ in offs], axis=1)
-    px = np.stack([x + dx for _, dx in offs], axis=1)
+def level_parents(pix: Array, level: int, h: int, w: int, spacing: int):
+    """The parents of a level's flat pixels ``pix`` int32[n] (``level`` >= 1), computed in the
+    program rather than stored as constants of it: indices int32[n, 4] (clamped), ``ins``
+    bool[n, 4] (inside the image), averaging weights float32[n, 4] over the opposite pairs
+    lying wholly inside (else over the parents inside), ``cnt`` float32[n] (parents inside, at
+    least 1) and ``pair`` bool[n] (a complete opposite pair is inside)."""
+    offsets = [o for pair in parent_pairs(level, spacing) for o in pair]
+    py = (pix // w)[:, None] + jnp.asarray([[dy for dy, _ in offsets]], jnp.int32)
+    px = (pix % w)[:, None] + jnp.asarray([[dx for _, dx in offsets]], jnp.int32)
     ins = (py >= 0) & (py < h) & (px >= 0) & (px < w)
-    pidx = np.clip(py, 0, h - 1) * w + np.clip(px, 0, w - 1)
-    pair_ok = np.stack([ins[:, 0] & ins[:, 1], ins[:, 2] & ins[:, 3]], axis=1)
-    wts = np.repeat(pair_ok, 2, axis=1).astype(np.float64)
-    none = ~np.any(pair_ok, axis=1)
-    wts[none] = ins[none]  # no complete pair: the parents that are inside
-    wts /= np.maximum(wts.sum(axis=1, keepdims=True), 1.0)
-    return pidx.astype(np.int32), ins, wts.astype(np.float32), np.any(pair_ok, axis=1)
-
-
-def level_tables(h: int, w: int, spacing: int) -> list[dict]:
-    """Static tables of each level's pixels (``level_pixels``), one dict a level, each sized to
-    its own n pixels: ``pix`` int32[n], parents ``pidx`` int32[n, 4], ``ins`` bool[n, 4],
-    averaging ``wts`` float32[n, 4], ``cnt`` float32[n] (parents inside, at least 1) and ``pair``
-    bool[n] (a complete opposite pair is inside; level 0: True)."""
-    tables = []
-    for level, idx in enumerate(level_pixels(h, w, spacing)):
-        n = len(idx)
-        t = {"pix": np.asarray(idx, np.int32), "pidx": np.zeros((n, 4), np.int32),
-             "ins": np.zeros((n, 4), bool), "wts": np.zeros((n, 4), np.float32),
-             "pair": np.ones((n,), bool)}
-        if level > 0:
-            t["pidx"], t["ins"], t["wts"], t["pair"] = _parents(idx, level, h, w, spacing)
-        t["cnt"] = np.maximum(t["ins"].sum(axis=1), 1).astype(np.float32)
-        tables.append(t)
-    return tables
+    pidx = jnp.clip(py, 0, h - 1) * w + jnp.clip(px, 0, w - 1)
+    pair_ok = jnp.stack([ins[:, 0] & ins[:, 1], ins[:, 2] & ins[:, 3]], axis=1)
+    pair = pair_ok[:, 0] | pair_ok[:, 1]
+    # No complete pair: the parents that are inside (every pixel past level 0 has one).
+    wts = jnp.where(pair[:, None], jnp.repeat(pair_ok, 2, axis=1), ins).astype(jnp.float32)
+    wts = wts / jnp.maximum(jnp.sum(wts, axis=1, keepdims=True), 1.0)
+    cnt = jnp.maximum(jnp.sum(ins, axis=1), 1).astype(jnp.float32)
+    return pidx, ins, wts, cnt, pair
 
 
 def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, covered: Array,
@@ -145,7 +128,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     ``shade_fn(pixels int32[c], live bool[c]) -> float32[c, 3]`` shades flat pixel indices;
     ``ids`` int32[H, W] surface ids (-1 uncovered); ``covered`` bool[H, W] (uncovered pixels are
     never shaded and come out 0); ``border`` as DacsConfig. The levels run one after another,
-    unrolled in the program, each over its own pixels (``level_tables``): a level's pixels are
+    unrolled in the program, each over its own pixels (``level_pixels``): a level's pixels are
     independent, as every parent lies on an earlier level. Each level compacts its pixels to
     shade into a work list and dispatches it in chunks.
     Returns (image float32[H, W, 3], shaded bool[H, W], level int32[H, W], counts)."""
@@ -160,11 +143,8 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
     # four times the lanes DACS shades; benchmarks/RESULTS.md, ninth and twelfth sessions.
     level_chunk = int(chunk) if int(chunk) > 0 else dispatch.MIN_CHUNK  # run() caps it at the list
 
-    def level_pass(level, tables, img):
-        # Unrolled rather than a loop over steps padded to one size: on a GPU a loop reads back
-        # to the host every iteration and decides over the padding too.
-        pix, pidx, ins, wts, cnt, pair = (
-            jnp.asarray(tables[key]) for key in ("pix", "pidx", "ins", "wts", "cnt", "pair"))
+    def decide_and_interpolate(level, pix, cov, img):
+        pidx, ins, wts, cnt, pair = level_parents(pix, level, h, w, spacing)
         c = img[pidx]  # [n, 4, 3] parents, final from earlier levels
         with jax.named_scope("decide"):
             id_diff = any_small(ins & (ids_f[pidx] != ids_f[pix][:, None]), axis=1)
@@ -172,32 +152,38 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
             insf = ins.astype(jnp.float32)
             mean = sum_small(insf * lum, axis=1) / cnt
             var = sum_small(insf * (lum - mean[:, None]) ** 2, axis=1) / cnt
-            cov = cov_f[pix]
             no_pair = ~pair if border == "shade" else jnp.zeros_like(cov)
-            need = cov & ((level == 0) | no_pair | id_diff | (var >= thr))
+            need = cov & (no_pair | id_diff | (var >= thr))
         with jax.named_scope("interpolate"):
             interp = sum_small(wts[:, :, None] * c, axis=1)
             val = jnp.where((cov & ~need)[:, None], interp, 0.0)
             img = img.at[pix].set(val, unique_indices=True)
+        return img, need
+
+    img = jnp.zeros((n_pix, 3), jnp.float32)
+    levels = level_pixels(h, w, spacing)
+    needs, inv, lanes, chunks = [], jnp.int32(0), jnp.int32(0), jnp.int32(0)
+    # Unrolled rather than a loop over steps padded to one size: on a GPU a loop reads back to
+    # the host every iteration and decides over the padding too.
+    for level, level_pix in enumerate(levels):
+        if len(level_pix) == 0:  # an image too small for this level
+            needs.append(jnp.zeros((0,), bool))
+            continue
+        pix = jnp.asarray(level_pix, jnp.int32)
+        cov = cov_f[pix]
+        if level == 0:  # always shaded
+            need = cov
+        else:
+            img, need = decide_and_interpolate(level, pix, cov, img)
         with jax.named_scope("shade"):
             listed = dispatch.WorkList.of(need)
             img, work = dispatch.run(dispatch.WorkList(pix[listed.items], listed.count),
                                      shade_fn, img, level_chunk, default_mode="switch")
-        return img, need, work
-
-    tables = level_tables(h, w, spacing)
-    img = jnp.zeros((n_pix, 3), jnp.float32)
-    needs, inv, lanes, chunks = [], jnp.int32(0), jnp.int32(0), jnp.int32(0)
-    for level, level_tab in enumerate(tables):
-        if len(level_tab["pix"]) == 0:  # an image too small for this level
-            needs.append(jnp.zeros((0,), bool))
-            continue
-        img, need, work = level_pass(level, level_tab, img)
         needs.append(need)
         inv, lanes, chunks = inv + work.invocations, lanes + work.lanes, chunks + work.chunks
     warp = dacs_warp.simulate(needs, warp_width, warp_batches)
     # Every pixel is in exactly one level.
-    all_pix = np.concatenate([t["pix"] for t in tables])
+    all_pix = np.concatenate(levels).astype(np.int32)
     shaded = jnp.zeros((n_pix,), bool).at[all_pix].set(jnp.concatenate(needs),
                                                         unique_indices=True)
     counts = {"shade_invocations": inv, "dispatch_lanes": lanes, "dispatch_chunks": chunks,
