@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Prepared in the thirty-fourth session for the next one, one call (carry [".whl"]), on the
+# H200 the issue names if one comes (ask for kind nvidia-h200), else an H100:
+#   bash benchmarks/gpu_thirty_fifth.sh targets fits
+# targets: every real-time pipeline on glass and room (8-frame pans, images only), as
+#   gpu_thirty_fourth.sh's (call 2 there ran on an H100: glass deferred 2.823, checkerboard
+#   2.974, DACS 3.193, visbuffer 3.135, forward 4.743, object space 4.550; room forward 3.256).
+#   Prediction on an H200: glass's deferred and checkerboard under 3 ms, DACS 3.0-3.2.
+# fits: the visibility pass alone, deferred and DACS on foliage at costs 0 and 256 (8-frame
+#   sequences): DACS's fixed cost and slope with its levels unrolled and its parents computed.
+#   Before (H100, 2026-12-06): DACS 1.20 ms above the visibility pass, slope 1.96x deferred's.
+#   Prediction: 0.95-1.1 ms above it, slope 1.6-2.0x (the unrolled levels spare host reads,
+#   a cost every frame pays, not one per point).
+. "$(dirname "$0")/gpu_env.sh"
+for part in $*; do
+  if [ "$part" = targets ]; then
+    nvidia-smi --query-gpu=name --format=csv,noheader | tee -a "$OUT/targets.md"
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 330 $S --scenes glass room --pipelines deferred \
+      forward checkerboard dacs visbuffer object_space tads --json "$OUT/targets.json" 2>&1 \
+      | quiet | grep '^|' | tee -a "$OUT/targets.md"
+  elif [ "$part" = fits ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 python3 benchmarks/bench_time_work.py \
+      --scenes foliage --pipelines visibility deferred dacs --costs 0 256 --frames 8 \
+      --repeats 5 --budget 220 --out "$OUT/fits.jsonl" 2>&1 | quiet | grep -v '^{' \
+      | tee -a "$OUT/fits.md"
+  fi
+  bundle_out
+done
+exit 0
