@@ -14,11 +14,7 @@
 . "$(dirname "$0")/gpu_env.sh"
 for part in $*; do
   if [ "$part" = targets ]; then
-    nvidia-smi --query-gpu=name --format=csv,noheader | tee -a "$OUT/targets.md"
-    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
-    PYTHONPATH=$PWD:/tmp/site timeout -k 5 330 $S --scenes glass room --pipelines deferred \
-      forward checkerboard dacs visbuffer object_space tads --json "$OUT/targets.json" 2>&1 \
-      | quiet | grep '^|' | tee -a "$OUT/targets.md"
+    OUT=$OUT bash benchmarks/gpu_thirty_fourth.sh targets
   elif [ "$part" = fits ]; then
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 python3 benchmarks/bench_time_work.py \
       --scenes foliage --pipelines visibility deferred dacs --costs 0 256 --frames 8 \
