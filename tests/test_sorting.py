@@ -28,12 +28,14 @@ def assert_lexsorted(got_keys, got_payload, keys, payload, path):
 
 # At n = 3000 (12 index bits): (3, 100) and (7, 2**20, 2**17) pack beside the index;
 # (2**24, 2**26, 2**5) and (2**20, 2**30) fit a uint64 only without it (``pair_sort`` on a
-# GPU, several packed sorts elsewhere); the others need several packed sorts.
+# GPU, several packed sorts elsewhere); the others need several packed sorts. NARROW_LIMITS
+# (32 and 31 bits) fit a uint32 only without the index: a uint32 pairs sort on a GPU.
 PAIR_LIMITS = [(2**24, 2**26, 2**5), (2**20, 2**30)]
+NARROW_LIMITS = [(2**12, 2**14, 2**3), (2**13, 2**16)]
 
 
 @pytest.mark.parametrize("limits", [(3, 100), (7, 2**20, 2**17), (2**31 - 2, 2**31 - 2, 5),
-                                    (2**30,) * 4, *PAIR_LIMITS])
+                                    (2**30,) * 4, *PAIR_LIMITS, *NARROW_LIMITS])
 def test_lex_sort_equals_numpy_lexsort(limits):
     keys, payload = random_keys(limits)
     got_keys, (got_payload,) = lex_sort([jnp.asarray(k, jnp.int32) for k in keys], limits,
@@ -41,7 +43,7 @@ def test_lex_sort_equals_numpy_lexsort(limits):
     assert_lexsorted(got_keys, got_payload, keys, payload, "lex_sort")
 
 
-@pytest.mark.parametrize("limits", PAIR_LIMITS)
+@pytest.mark.parametrize("limits", PAIR_LIMITS + NARROW_LIMITS)
 def test_pair_sort_equals_numpy_lexsort(limits):
     """The GPU's path, called directly: on this CPU ``lex_sort`` takes the packed sorts."""
     from jaxrender.sorting import key_codes, pair_sort
@@ -52,17 +54,23 @@ def test_pair_sort_equals_numpy_lexsort(limits):
     assert_lexsorted(got_keys, got_payload, keys, payload, "pair_sort")
 
 
-@pytest.mark.parametrize("platform, operands", [("cuda", [2]), ("cpu", [1, 1])])
-def test_keys_wider_than_the_index_allows_sort_once_on_a_gpu(platform, operands):
-    """Lowered for each platform: one sort of (key, index) for CUDA, two packed-key sorts of
-    one operand each for the CPU (where the stable two-operand sort is a comparison sort)."""
+@pytest.mark.parametrize("limits, platform, operands, key_type", [
+    (PAIR_LIMITS[1], "cuda", [2], "ui64"), (PAIR_LIMITS[1], "cpu", [1, 1], "i64"),
+    (NARROW_LIMITS[1], "cuda", [2], "ui32"), (NARROW_LIMITS[1], "cpu", [1], "i64")])
+def test_keys_wider_than_the_index_allows_sort_once_on_a_gpu(limits, platform, operands,
+                                                             key_type):
+    """Lowered for each platform: one sort of (key, index) for CUDA, its key a uint32 where
+    the keys fit one; packed-key sorts of one operand each for the CPU (where the stable
+    two-operand sort is a comparison sort)."""
     def fn(a, b):
-        return lex_sort((a, b), PAIR_LIMITS[1])
+        return lex_sort((a, b), limits)
 
     x = jnp.zeros(3000, jnp.int32)
     text = jax.jit(fn).trace(x, x).lower(lowering_platforms=(platform,)).as_text()
     sorts = re.findall(r'"stablehlo.sort"\(([^)]*)\)', text)
     assert [len(s.split(",")) for s in sorts] == operands, (platform, sorts)
+    types = re.findall(r'"stablehlo.sort".*?\}\) : \(tensor<3000x(\w+)>', text, re.S)
+    assert types and types[0] == key_type, (platform, types)
 
 
 def test_key_groups_fill_from_the_least_significant_key():
