@@ -11,6 +11,11 @@
 #   Before (H100, 2026-12-06): DACS 1.20 ms above the visibility pass, slope 1.96x deferred's.
 #   Prediction: 0.95-1.1 ms above it, slope 1.6-2.0x (the unrolled levels spare host reads,
 #   a cost every frame pays, not one per point).
+# Call 1 ran `targets fits` on an H100 (RESULTS.md, thirty-fifth session). Call 2:
+#   bash benchmarks/gpu_thirty_fifth.sh glassprof
+# glassprof: deferred's frame on glass and on room, and DACS's on glass, kernels by scope with
+#   each scope's longest kernels: what glass adds to every pipeline that runs the transparent
+#   pass (deferred on glass 2.75 ms against 1.61 on room, H100, call 1).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $*; do
   if [ "$part" = targets ]; then
@@ -20,6 +25,15 @@ for part in $*; do
       --scenes foliage --pipelines visibility deferred dacs --costs 0 256 --frames 8 \
       --repeats 5 --budget 220 --out "$OUT/fits.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/fits.md"
+  elif [ "$part" = glassprof ]; then
+    for case in "deferred glass" "deferred room" "dacs glass"; do
+      set -- $case
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/profile_kernels.py "$1" \
+        --scene "$2" --top 30 --calls 3 --scope-top 4 $(printf -- '--scope %s ' visibility \
+        gbuffer lighting decide transparent fragments layer_shading composite sorted_blend \
+        counts lights texture shadow_lookup surface_points) 2>&1 | quiet \
+        | tee -a "$OUT/glassprof.md"
+    done
   fi
   bundle_out
 done
