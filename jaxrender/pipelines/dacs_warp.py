@@ -18,9 +18,7 @@ step using only those lanes.
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
-import numpy as np
 
 from jaxrender.pipelines.waves import count_waves
 from jaxrender.types import Array
@@ -29,32 +27,27 @@ WARP_WIDTHS = (32, 64)
 
 
 def simulate_level(need: Array, width: int, batches: int) -> dict:
-    """``need`` bool[N]: the level's pixels (in order) that are shaded. Returns int32 counts."""
+    """``need`` bool[N]: the level's pixels (in order) that are shaded. Returns int32 counts.
+
+    The queue needs no step-by-step replay: it holds fewer than ``width`` pixels before each
+    search step and gains at most ``width``, so after a warp's k-th step it holds its first k
+    steps' pushes modulo ``width`` and has run one full SHADE step per ``width`` of them; its
+    SHADE steps, the final partial one included, number ceil(pushes / width). Closed form, so
+    the program holds no loop of tiny steps for counts alone."""
     n = need.shape[0]
     per_warp = width * batches
     warps = max(-(-n // per_warp), 1)
     pad = warps * per_warp - n
-    valid = np.concatenate([np.ones(n, bool), np.zeros(pad, bool)]).reshape(warps, batches, width)
-    need = jnp.concatenate([need, jnp.zeros((pad,), bool)]).reshape(warps, batches, width)
-    valid = jnp.asarray(valid)
-
-    def step(q, b):
-        nd, vd = b
-        searched = jnp.any(vd, axis=-1)
-        q = q + jnp.sum(nd, axis=-1, dtype=jnp.int32)
-        full = q >= width
-        q = jnp.where(full, q - width, q)
-        naive = jnp.any(nd, axis=-1)
-        return q, (searched, full, naive)
-
-    xs = (jnp.moveaxis(need, 1, 0), jnp.moveaxis(valid, 1, 0))
-    q, (searched, full, naive) = jax.lax.scan(step, jnp.zeros((warps,), jnp.int32), xs)
+    groups = jnp.concatenate([need, jnp.zeros((pad,), bool)]).reshape(warps * batches, width)
+    pushes = jnp.sum(groups.reshape(warps, per_warp), axis=1, dtype=jnp.int32)
     i32 = lambda a: jnp.sum(a, dtype=jnp.int32)
-    search = i32(searched)
-    shade = i32(full) + i32(q > 0)
+    # The warp's search steps: its groups of ``width`` that hold a pixel of the level.
+    search = jnp.int32(-(-n // width))
+    shade = i32((pushes + width - 1) // width)
     # The warps launched: the level's pixels in runs of per_warp, one warp per run.
     launched, _ = count_waves(jnp.asarray([n], jnp.int32), per_warp, jnp.int32(0))
-    return {"search_steps": search, "shade_steps": shade, "naive_shade_steps": i32(naive),
+    return {"search_steps": search, "shade_steps": shade,
+            "naive_shade_steps": i32(jnp.any(groups, axis=1)),
             "searched": jnp.int32(n), "shaded": i32(need), "warps": launched}
 
 

@@ -245,6 +245,38 @@ def test_warp_simulation_counts():
         simulate(all_on, 48, 4)
 
 
+def _warp_scheme_by_steps(needs, width, batches):
+    """The warp scheme replayed one SIMD step at a time, as the module docstring states it:
+    (search steps, shade steps, naive shade steps)."""
+    search = shade = naive = 0
+    for need in needs:
+        need = list(map(bool, need))
+        per_warp = width * batches
+        for start in range(0, len(need), per_warp):
+            queue = 0
+            for g in range(start, min(start + per_warp, len(need)), width):
+                group = need[g:g + width]
+                search += 1
+                naive += any(group)
+                queue += sum(group)
+                if queue >= width:  # a full SHADE step
+                    shade, queue = shade + 1, queue - width
+            shade += queue > 0  # the level's barrier drains the queue
+    return search, shade, naive
+
+
+@pytest.mark.parametrize("width,batches", [(32, 4), (64, 2), (32, 1)])
+def test_warp_simulation_matches_a_step_by_step_replay(width, batches):
+    rng = np.random.default_rng(width * 10 + batches)
+    lengths = [0, 1, 31, 200, 1000, width * batches * 3 + 5]
+    needs = [rng.random(n) < rng.choice([0.0, 0.05, 0.3, 0.9, 1.0]) for n in lengths]
+    c = simulate([jnp.asarray(n) for n in needs], width, batches)
+    want = _warp_scheme_by_steps(needs, width, batches)
+    got = (int(c["warp_search_steps"]), int(c["warp_shade_steps"]),
+           int(c["naive_simd_steps"]) - int(c["warp_search_steps"]))
+    assert got == want, f"(search, shade, naive shade) steps {got}, replay {want}"
+
+
 def test_dacs_counts_and_config_errors():
     scene = shapes_scene()
     f = dacs_mod.render(scene, scene.camera, _cfg(threshold=0.01))
