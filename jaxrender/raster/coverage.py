@@ -62,21 +62,24 @@ def _then_loop(then, state, items):
     return jax.lax.fori_loop(jnp.int64(0), n, body, (state, items))
 
 
-def _chunk_loop(total: Array, capacity: int, state, body, peel: bool, then):
+def _chunk_loop(total: Array, capacity: int, state, body, peel: bool | str, then):
     """``state = body(k, state)`` for the chunks k of ``total`` items, then ``then``; returns
     (state, total + the items ``then`` adds). A loop with a dynamic trip count makes the GPU
     wait for the host at every test of its condition. ``peel`` runs chunk 0 unconditionally
     (its items are masked when there are none) and runs the further chunks and ``then``'s
     steps in one loop, choosing per step, so that a frame whose items fit one chunk and which
-    has no ``then`` work tests one condition instead of two or three."""
+    has no ``then`` work tests one condition instead of two or three. ``peel="first"`` runs
+    chunk 0 unconditionally and ``then`` in a loop of its own: one condition fewer than no
+    peel, and no conditional inside the loop, through which XLA would copy the state at every
+    step (a fragment list's capacity-sized arrays)."""
     n_chunks = (total + capacity - 1) // capacity
     if not peel:
         state = jax.lax.fori_loop(jnp.int64(0), n_chunks, body, state)
         return _then_loop(then, state, total)
     state = body(jnp.int64(0), state)
     n_more = jnp.maximum(n_chunks, 1)
-    if then is None:
-        return jax.lax.fori_loop(jnp.int64(1), n_more, body, state), total
+    if then is None or peel == "first":
+        return _then_loop(then, jax.lax.fori_loop(jnp.int64(1), n_more, body, state), total)
     n_then, then_body = then
 
     def step(k, carry):

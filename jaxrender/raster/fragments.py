@@ -125,7 +125,7 @@ def collect_fragments(clip, faces, width: int, height: int, capacity: int, cull_
         (pix, tri, depth, n), _ = traverse(
             clip, faces, width, height, cull_backfaces, offset.astype(jnp.int64),
             work_capacity, clip_capacity, init, append, traversal,
-            peel=False,  # the state is three capacity-sized lists: copied through a cond
+            peel="first",  # three capacity-sized lists: a cond in the loop would copy them
         )
         valid = jnp.arange(capacity) < n
         return Fragments(pix, tri, depth, valid, n.astype(jnp.int32))

@@ -241,9 +241,10 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     "gpu" by the platform the program is lowered for; "cpu": spans, or bounding boxes below
     SPANS_MIN_PIXELS; "gpu": per-item setup ("recompute") where triangles are dense, else
     bounding boxes, first chunk peeled and the clip chunks in the coverage loop; or one of
-    ``coverage.TRAVERSALS`` everywhere (test hooks). ``peel=False``: "gpu" runs every chunk
-    and the clip chunks in two plain loops, for a state too large to pass through the
-    conditional that joins them (XLA copies the state into and out of it at every step).
+    ``coverage.TRAVERSALS`` everywhere (test hooks). ``peel="first"``: "gpu" runs the first
+    chunk unconditionally, the other chunks and the clip chunks in two plain loops, for a
+    state too large to pass through the conditional that joins them (XLA copies the state
+    into and out of it at every step); ``peel=False``: every chunk in the loop.
     """
     if traversal not in TRAVERSALS:
         raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
@@ -256,7 +257,7 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
                                           default=on("gpu"))
     n_tris = faces.shape[0]
     guard = guard_band(width, height)
-    peel = peel and traversal == "gpu"
+    peel = peel if traversal == "gpu" else False
     if traversal == "cpu":
         traversal = "bbox" if width * height < SPANS_MIN_PIXELS else "spans"
     elif traversal == "gpu":

@@ -63,7 +63,7 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
     out = {tr: fragments_jit(jnp.asarray(clip), jnp.asarray(faces), width=W, height=H,
                              capacity=cap, cull_backfaces=False, offset=(128, 128),
                              work_capacity=4096, clip_capacity=64, traversal=tr)
-           for tr in ("bbox", "spans", "recompute", "gpu")}  # gpu: unpeeled for fragments
+           for tr in ("bbox", "spans", "recompute", "gpu")}  # gpu: first chunk peeled alone
     n = int(out["bbox"].count)
     assert 0 < n <= cap
     for tr in ("spans", "recompute", "gpu"):
@@ -77,8 +77,9 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
 @pytest.mark.parametrize("traversal", ["bbox", "recompute"])
 def test_peeled_first_chunk_changes_nothing(rng, traversal):
     # The GPU runs a box traversal's first chunk outside its loop and the later chunks and the
-    # ``then`` steps (the clip chunks) in one loop: the same chunks and steps, in the same
-    # order, must run, whether the items fill many chunks, one, or none at all.
+    # ``then`` steps (the clip chunks) in one loop (peel=True), or in two (peel="first", the
+    # fragment lists): the same chunks and steps, in the same order, must run, whether the
+    # items fill many chunks, one, or none at all.
     import jax
 
     from jaxrender.raster.coverage import for_each_chunk
@@ -126,10 +127,12 @@ def test_peeled_first_chunk_changes_nothing(rng, traversal):
     for ok, capacity in ((np.ones(n, bool), 256), (np.ones(n, bool), 1 << 20),
                          (np.zeros(n, bool), 256)):
         for n_then in (0, 3):
-            a, b = run(ok, capacity, False, n_then), run(ok, capacity, True, n_then)
-            what = f"capacity {capacity}, {n_then} more steps"
-            np.testing.assert_array_equal(b[0], a[0], err_msg=f"{what}: z-buffer")
-            assert b[1:] == a[1:], (what, a[1:], b[1:])
+            a = run(ok, capacity, False, n_then)
+            for peel in (True, "first"):
+                b = run(ok, capacity, peel, n_then)
+                what = f"peel={peel!r}, capacity {capacity}, {n_then} more steps"
+                np.testing.assert_array_equal(b[0], a[0], err_msg=f"{what}: z-buffer")
+                assert b[1:] == a[1:], (what, a[1:], b[1:])
     assert a[2] == 60  # the last case has no items (the peeled chunk was all masked): 10+20+30
 
 
