@@ -16,6 +16,14 @@
 # glassprof: deferred's frame on glass and on room, and DACS's on glass, kernels by scope with
 #   each scope's longest kernels: what glass adds to every pipeline that runs the transparent
 #   pass (deferred on glass 2.75 ms against 1.61 on room, H100, call 1).
+# Call 3 (carry [".whl", ".v/s34", ".v/wp"]): bash benchmarks/gpu_thirty_fifth.sh after35
+# after35: glass's deferred, DACS and forward, A B B A over three trees: s34 (this session's
+#   start, 21322fd), wp (DACS's warp counts in closed form, fragment lists peeling their
+#   first chunk alone) and after (wp, and the composite's factors stored as one row an entry
+#   before its sort). JAX's persistent cache serves each tree's second pass.
+#   Predictions: wp against s34, DACS 0.05-0.15 ms faster (20 loop steps and their copies
+#   fewer), deferred and forward 0.02-0.06 (one host read fewer a fragment list); after
+#   against wp, deferred, DACS and forward 0.05-0.12 faster (the sort's gather).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $*; do
   if [ "$part" = targets ]; then
@@ -25,6 +33,11 @@ for part in $*; do
       --scenes foliage --pipelines visibility deferred dacs --costs 0 256 --frames 8 \
       --repeats 5 --budget 220 --out "$OUT/fits.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/fits.md"
+  elif [ "$part" = after35 ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side after35 220 "s34 wp after" --scenes glass --pipelines deferred dacs forward
   elif [ "$part" = glassprof ]; then
     for case in "deferred glass" "deferred room" "dacs glass"; do
       set -- $case
