@@ -16,6 +16,9 @@
 # glassprof: deferred's frame on glass and on room, and DACS's on glass, kernels by scope with
 #   each scope's longest kernels: what glass adds to every pipeline that runs the transparent
 #   pass (deferred on glass 2.75 ms against 1.61 on room, H100, call 1).
+# Call 4 (carry [".whl", ".v/s34"]): bash benchmarks/gpu_thirty_fifth.sh abba35
+# abba35: call 3's s34 against after, four passes (A B B A A B B A), 16-frame pans, 5 rounds:
+#   call 3's passes of one tree differed by up to 0.14 ms, more than the changes predicted.
 # Call 3 (carry [".whl", ".v/s34", ".v/wp"]): bash benchmarks/gpu_thirty_fifth.sh after35
 # after35: glass's deferred, DACS and forward, A B B A over three trees: s34 (this session's
 #   start, 21322fd), wp (DACS's warp counts in closed form, fragment lists peeling their
@@ -38,6 +41,11 @@ for part in $*; do
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side after35 220 "s34 wp after" --scenes glass --pipelines deferred dacs forward
+  elif [ "$part" = abba35 ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 16 --rounds 5 --no-single --outputs images"
+    ORDERS=4 side_by_side abba35 200 "s34 after" --scenes glass --pipelines deferred dacs forward
   elif [ "$part" = glassprof ]; then
     for case in "deferred glass" "deferred room" "dacs glass"; do
       set -- $case
