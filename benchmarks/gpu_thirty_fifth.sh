@@ -17,7 +17,7 @@
 #   each scope's longest kernels: what glass adds to every pipeline that runs the transparent
 #   pass (deferred on glass 2.75 ms against 1.61 on room, H100, call 1).
 # Call 4 (carry [".whl", ".v/s34"]): bash benchmarks/gpu_thirty_fifth.sh abba35
-# abba35: call 3's s34 against after, four passes (A B B A A B B A), 16-frame pans, 5 rounds:
+# abba35: call 3's s34 against after, A B B A (ORDERS=4: twice), 16-frame pans, 5 rounds:
 #   call 3's passes of one tree differed by up to 0.14 ms, more than the changes predicted.
 # Call 3 (carry [".whl", ".v/s34", ".v/wp"]): bash benchmarks/gpu_thirty_fifth.sh after35
 # after35: glass's deferred, DACS and forward, A B B A over three trees: s34 (this session's
@@ -45,7 +45,8 @@ for part in $*; do
     export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 16 --rounds 5 --no-single --outputs images"
-    ORDERS=4 side_by_side abba35 200 "s34 after" --scenes glass --pipelines deferred dacs forward
+    ORDERS=${ORDERS:-2} side_by_side abba35 150 "s34 after" --scenes glass --pipelines deferred \
+      dacs forward
   elif [ "$part" = glassprof ]; then
     for case in "deferred glass" "deferred room" "dacs glass"; do
       set -- $case
