@@ -19,6 +19,7 @@
 # Call 4 (carry [".whl", ".v/s34"]): bash benchmarks/gpu_thirty_fifth.sh abba35
 # abba35: call 3's s34 against after, A B B A (ORDERS=4: twice), 16-frame pans, 5 rounds:
 #   call 3's passes of one tree differed by up to 0.14 ms, more than the changes predicted.
+#   PIPES="deferred forward" leaves DACS (the longest compile) out.
 # Call 3 (carry [".whl", ".v/s34", ".v/wp"]): bash benchmarks/gpu_thirty_fifth.sh after35
 # after35: glass's deferred, DACS and forward, A B B A over three trees: s34 (this session's
 #   start, 21322fd), wp (DACS's warp counts in closed form, fragment lists peeling their
@@ -45,8 +46,8 @@ for part in $*; do
     export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 16 --rounds 5 --no-single --outputs images"
-    ORDERS=${ORDERS:-2} side_by_side abba35 150 "s34 after" --scenes glass --pipelines deferred \
-      dacs forward
+    ORDERS=${ORDERS:-2} side_by_side abba35 150 "s34 after" --scenes glass --pipelines \
+      ${PIPES:-deferred dacs forward}
   elif [ "$part" = glassprof ]; then
     for case in "deferred glass" "deferred room" "dacs glass"; do
       set -- $case
