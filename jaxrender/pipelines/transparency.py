@@ -41,7 +41,6 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.compaction import compact_indices
-from jaxrender.fusion import materialize
 from jaxrender.pipelines.base import BLENDING_DEFAULTS
 from jaxrender.pipelines.quads import segment_starts
 from jaxrender.pipelines.visibility import (clip_vertices, faces_where, is_transparent, points_at,
@@ -308,9 +307,6 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
     in passes of ``settings.layers``. Returns (image, passes, overflow)."""
     n_pix, cap = background.shape[0], settings.layers
     premult, trans, _ = blend_factors(scene, layers)
-    # Stored once in list order as one row per entry, so that the sort's gather reads one
-    # 16-byte row an entry, not the shaded values and material tables behind each factor.
-    factors = materialize(jnp.concatenate([premult, trans[:, None]], axis=1))
     if settings.order == "depth":
         bits = jax.lax.bitcast_convert_type(jnp.clip(layers.depth, 0.0, 1.0), jnp.int32)
         order, limit = ONE_BITS - bits, ONE_BITS  # far first
@@ -318,7 +314,7 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
         order, limit = layers.tri, scene.num_triangles - 1  # first drawn first
     # Out of range, so sorted last: every key of the entries not blended.
     keys = (jnp.where(layers.front, layers.pixel, n_pix), jnp.where(layers.front, order, limit + 1))
-    (pix, _), (factors,) = lex_sort(keys, (n_pix - 1, limit), (factors,))
+    (pix, _), (premult, trans) = lex_sort(keys, (n_pix - 1, limit), (premult, trans))
     n_entries = pix.shape[0]
     # Each pixel's layers lie together in the sorted list, farthest first, from its first
     # entry on: a pass reads layers k cap .. k cap + cap - 1 of every pixel from there.
@@ -335,10 +331,10 @@ def sorted_composite(scene, layers: Layers, background, per_pixel, settings: Ble
     def one_pass(k, image):
         def blend(slot_i, img):  # back to front inside the pass: slot 0 is the farthest
             layer = k * cap + slot_i
-            has = layer < per_pixel  # else none: 0 + 1 img
-            f = factors.at[jnp.where(has, first + layer, n_entries)].get(mode="fill",
-                                                                         fill_value=0.0)
-            return f[:, :3] + jnp.where(has, f[:, 3], 1.0)[:, None] * img
+            at = jnp.where(layer < per_pixel, first + layer, n_entries)  # none: 0 + 1 img
+            c = premult.at[at].get(mode="fill", fill_value=0.0)
+            t = trans.at[at].get(mode="fill", fill_value=1.0)
+            return c + t[:, None] * img
 
         # Unrolled: the pass's layers become one chain of gathers and blends that XLA fuses
         # into one kernel, not a loop of ``cap`` small launches with a condition each.
