@@ -8,7 +8,10 @@ of the surface, filtered after shading, in one geometry pass.
   -> the masked (pixel, tap) pairs compacted and shaded through the chunked dispatch at each
      texel's own surface point (``object_space.shadel_points``), into the shade texture
   -> filtering: every covered pixel samples the shade texture bilinearly at its physical
-     position (``aniso_taps`` taps along the gradient).
+     position (``aniso_taps`` taps along the gradient)
+  -> blended surfaces, on a scene with them: the forward transparent pass over the filtered
+     image, as deferred's (``transparency.transparent_pass``; its settings from
+     ``BlendingConfig``). The charts are the scene's, the blended meshes' included.
 
 State: the shade texture float32[texels, 3] and the frame each texel was last shaded
 int32[texels] (-1 never). With ``shade_every = N`` a texel is shaded when it was never shaded
@@ -28,7 +31,7 @@ import jax
 import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
-from jaxrender.pipelines.base import PipelineConfig, make_counts, poison_on_overflow
+from jaxrender.pipelines.base import BlendingConfig, make_counts, poison_on_overflow
 from jaxrender.pipelines.gbuffer import DEPTH_BYTES
 from jaxrender.pipelines.object_space import ObjectSpaceConfig, shadel_points
 from jaxrender.pipelines.os_sheet import LANES
@@ -38,7 +41,7 @@ from jaxrender.pipelines.tads_samples import (Samples, decode, footprint_texels,
                                               gbuffer_channels, geometry_pass, sample_mask,
                                               unique_samples)
 from jaxrender.pipelines.vertex_work import vertex_counts
-from jaxrender.pipelines.transparency import refuse_transparency
+from jaxrender.pipelines.transparency import merge_counts, transparent_pass
 from jaxrender.pipelines.visibility import visibility
 from jaxrender.pipelines.waves import check_wave_size, count_waves
 from jaxrender.shading import shade
@@ -51,7 +54,7 @@ MAX_ANISO_TAPS = 7  # 4 texels a tap: the mask of 28 bits fits an int32
 
 
 @dataclass(frozen=True)
-class TadsConfig(PipelineConfig):
+class TadsConfig(BlendingConfig):
     """aniso_taps: bilinear taps along the footprint's gradient (1 = isotropic bilinear at the
     LOD of the longer footprint axis). shade_every: re-shade each 8x8 tile every N-th frame in
     sequences (texels never shaded are shaded at once). staleness: how much a tap's weight
@@ -181,8 +184,8 @@ def filter_pass(tex: ShadeTexture, smp: Samples, t, cfg: TadsConfig, vis_overflo
 @register("tads", TadsConfig, init=init, prepare=prepare)
 def step(scene, static: TadsStatic, state: ShadeTexture, camera, t, cfg: TadsConfig):
     """Texture-aligned deferred shading: unique texels of the pixels' footprints shaded, then
-    filtered."""
-    refuse_transparency(scene, "tads")  # its visibility holds the opaque surfaces alone
+    filtered; blended surfaces then composited over the opaque image by the forward
+    transparent pass the other deferred pipelines run (``transparency.transparent_pass``)."""
     with jax.named_scope("visibility"):
         vis = visibility(scene, camera, cfg)
     with jax.named_scope("geometry_pass"):
@@ -196,10 +199,12 @@ def step(scene, static: TadsStatic, state: ShadeTexture, camera, t, cfg: TadsCon
         tex, work = shade_texels(scene, camera, static, smp, state, t, cfg)
     with jax.named_scope("filter"):
         out = filter_pass(tex, smp, t, cfg, vis.counts["overflow"])
+    image, blended = transparent_pass(scene, camera, out.image, vis.depth, cfg)
     with jax.named_scope("counts"):
         counts, aux = tads_counts(static, cfg, fp, smp, due, work, out, vis)
         counts.update(vertex_counts(scene, full_passes=1))  # the raster pass
-    return Frame(out.image, counts, aux), tex
+        counts = merge_counts(counts, blended)
+    return Frame(poison_on_overflow(image, counts["overflow"]), counts, aux), tex
 
 
 def tads_counts(static: TadsStatic, cfg: TadsConfig, fp, smp: Samples, due, work, out, vis):

@@ -43,7 +43,7 @@ def _check_middle(image, expected, err_msg):
 
 
 @pytest.mark.parametrize("pipeline, layer_sets", [
-    ("forward", (THREE,)), ("deferred", (THREE,)),
+    ("forward", (THREE,)), ("deferred", (THREE,)), ("tads", (THREE,)),
     # Two layers put fewer fragments in front than the screen has pixels, three more: object
     # space's two lengths of its transparent sample list.
     ("object_space", (TWO, THREE)),
@@ -143,6 +143,7 @@ def test_blending_settings_are_refused_without_transparency():
     for pipeline, params in [("deferred", {"oit": "weighted"}),
                              ("forward", {"sort_transparent": False}),
                              ("visbuffer", {"transparent_layers": 2}),
+                             ("tads", {"transparent_overflow": "error"}),
                              ("object_space", {"oit": "weighted"})]:
         key = next(iter(params))
         with pytest.raises(ValueError, match=f"{key} has no effect"):
@@ -151,8 +152,6 @@ def test_blending_settings_are_refused_without_transparency():
         make_config("deferred", oit="weighted", transparent_layers=2)
     with pytest.raises(ValueError, match="sort_transparent = false has no effect"):
         make_config("forward", oit="weighted", sort_transparent=False)
-    with pytest.raises(ValueError, match="tads does not render transparent"):
-        _render(layered_quads(TWO), "tads")
 
 
 def test_the_pass_leaves_a_deferred_frame_as_its_neutral_settings_promise(monkeypatch):
