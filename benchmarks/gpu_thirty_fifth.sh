@@ -16,7 +16,12 @@
 # glassprof: deferred's frame on glass and on room, and DACS's on glass, kernels by scope with
 #   each scope's longest kernels: what glass adds to every pipeline that runs the transparent
 #   pass (deferred on glass 2.75 ms against 1.61 on room, H100, call 1).
-# Call 4 (carry [".whl", ".v/s34"]): bash benchmarks/gpu_thirty_fifth.sh abba35
+# Last call (carry [".whl", ".v/s34"]): bash benchmarks/gpu_thirty_fifth.sh last35
+# last35: TADS on glass (it now runs the transparent pass) beside deferred, then forward on
+#   room A B B A, s34 against after (two host reads fewer a frame: the fragment list peels its
+#   first chunk alone). Predictions: TADS on glass 2.9-3.2 ms (room's 1.83 plus deferred's
+#   glass-minus-room 1.14); forward on room 0.04-0.1 ms faster.
+# Call 4 (not run: no machine came): bash benchmarks/gpu_thirty_fifth.sh abba35
 # abba35: call 3's s34 against after, A B B A (ORDERS=4: twice), 16-frame pans, 5 rounds:
 #   call 3's passes of one tree differed by up to 0.14 ms, more than the changes predicted.
 #   PIPES="deferred forward" leaves DACS (the longest compile) out.
@@ -42,6 +47,15 @@ for part in $*; do
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side after35 220 "s34 wp after" --scenes glass --pipelines deferred dacs forward
+  elif [ "$part" = last35 ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 $S --scenes glass --pipelines tads deferred \
+      --json "$OUT/tads_glass.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/tads_glass.md"
+    bundle_out
+    S="$S --frames 16 --rounds 5"
+    side_by_side fwdroom 60 "s34 after" --scenes room --pipelines forward
   elif [ "$part" = abba35 ]; then
     export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
