@@ -39,7 +39,7 @@ def one_run(study: str, out: Path, cache: Path, processes: bool, force: bool,
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("--study", default="studies/quickstart.toml")
     ap.add_argument("--frames", help="override every path's frame count")
     args = ap.parse_args()

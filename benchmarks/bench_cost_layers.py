@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import help_summary, resolution_arg
 from jaxrender.pipelines import make_config
 from jaxrender.pipelines.visibility import visibility
 from jaxrender.scene import default_camera
@@ -114,7 +114,7 @@ def time_launch(scene, camera, pts, repeats: int) -> tuple[float, float]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["foliage", "room"])
     ap.add_argument("--sizes", nargs="+", type=int, default=[4096, 65536, 0],
                     help="lanes per launch; 0: every covered pixel")

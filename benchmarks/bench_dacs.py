@@ -30,6 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.metrics import image_metrics
+from jaxrender.parsing import help_summary
 from jaxrender.timing import device_description, time_call
 from jaxrender.pipelines import checkerboard, dacs, deferred, get_pipeline, make_config
 from jaxrender.seeds import dacs as seeds_dacs
@@ -131,7 +132,7 @@ def row(ctx, label, thr, q, count, ms):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["spheres", "room"])
     ap.add_argument("--width", type=int, default=128)
     ap.add_argument("--height", type=int, default=72)

@@ -15,7 +15,7 @@ import time
 
 import jax
 
-from jaxrender.parsing import parse_resolution
+from jaxrender.parsing import help_summary, parse_resolution
 from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.seeds import decima
 from jaxrender.study.backend import load_scene
@@ -26,7 +26,7 @@ KEYS = ("shade_invocations", "waves", "unfilled_lanes", "helper_lanes", "lane_ut
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--resolution", default=None, help="WxH (default: the study's)")
     ap.add_argument("--out", default=None, help="write the rows as JSON Lines here")
     args = ap.parse_args(argv)

@@ -11,6 +11,7 @@ import platform
 
 import jax
 
+from jaxrender.parsing import help_summary
 from jaxrender.raster import rasterize
 from jaxrender.scene import load_scene
 from jaxrender.shading import shade, surface_points
@@ -35,7 +36,7 @@ def timed(fn, *args, repeats):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scene", default="room")
     ap.add_argument("--width", type=int, default=256)
     ap.add_argument("--height", type=int, default=192)

@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.fusion import materialize_all
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import help_summary, resolution_arg
 from jaxrender.pipelines import make_config
 from jaxrender.pipelines.gbuffer import GBUFFER_CHANNELS, gbuffer_fields
 from jaxrender.pipelines.visibility import visibility
@@ -60,7 +60,7 @@ def variants(camera, vis, n: int) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["room", "glass"])
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--repeats", type=int, default=20)

@@ -188,7 +188,7 @@ def figure(rows: list[dict], path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("--cases", nargs="*", help="case names (default: all)")
     ap.add_argument("--pipelines", nargs="*", help="pipelines (default: all registered)")
     ap.add_argument("--out", default="benchmarks/hard_cases", help="output directory")

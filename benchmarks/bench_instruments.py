@@ -22,7 +22,7 @@ import json
 import jax
 
 from jaxrender import camera_path
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import help_summary, resolution_arg
 from jaxrender.pipelines import make_config, program
 from jaxrender.pipelines.registry import REGISTRY
 from jaxrender.scene import default_camera
@@ -47,7 +47,7 @@ def programs(name: str, scene, path, width: int, height: int):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["thin", "foliage", "room"])
     ap.add_argument("--pipelines", nargs="+", default=list(PIPELINES))
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")

@@ -19,7 +19,7 @@ import time
 import jax
 import numpy as np
 
-from jaxrender.parsing import parse_spec, resolution_arg
+from jaxrender.parsing import help_summary, parse_spec, resolution_arg
 from jaxrender.pipelines import dispatch, get_pipeline, make_config, program
 from jaxrender.scene import default_camera
 from jaxrender.shading import load_lit_scene
@@ -94,7 +94,7 @@ def table(rows: list, modes) -> str:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["foliage"])
     ap.add_argument("--costs", nargs="+", type=int, default=[0])
     ap.add_argument("--pipelines", nargs="+", default=list(PIPELINES))

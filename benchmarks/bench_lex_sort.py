@@ -22,6 +22,7 @@ import time
 import jax
 import numpy as np
 
+from jaxrender.parsing import help_summary
 from jaxrender.sorting import lex_sort
 
 N_PIX, ONE_BITS = 1920 * 1080, 0x3F800000
@@ -55,7 +56,7 @@ def sort_fn(kind: str):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--sizes", nargs="+", type=int, default=[1_000_000, 3_110_400])
     ap.add_argument("--keys", choices=sorted(LIMITS), default="composite")
     ap.add_argument("--repeats", type=int, default=20)

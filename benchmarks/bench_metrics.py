@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender import metrics
+from jaxrender.parsing import help_summary
 from jaxrender.timing import environment, time_call, time_first_call
 
 
@@ -78,7 +79,7 @@ def _library_calls(ref_np, test_np):
 
 
 def parse_args(argv=None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=help_summary(__doc__))
     p.add_argument("--width", type=int, default=1920)
     p.add_argument("--height", type=int, default=1080)
     p.add_argument("--frames", type=int, default=60, help="batch size (0: skip batched)")

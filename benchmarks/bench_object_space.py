@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import help_summary, resolution_arg
 from jaxrender.pipelines import get_pipeline, make_config
 from jaxrender.pipelines import object_space as osp
 from jaxrender.scene.builtin import builtin_scene
@@ -31,7 +31,7 @@ def _time(fn, repeats):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--size", type=resolution_arg, default="128x72")
     ap.add_argument("--scenes", default="stripes,spheres,room,terrain")
     ap.add_argument("--repeats", type=int, default=3)

@@ -46,7 +46,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from jaxrender.bench.raster import static_args, terrain_clip  # noqa: E402
 from jaxrender.bench.report import dump, print_table  # noqa: E402
 from jaxrender.errors import UserError  # noqa: E402
-from jaxrender.parsing import parse_resolution  # noqa: E402
+from jaxrender.parsing import help_summary, parse_resolution  # noqa: E402
 from jaxrender.raster import rasterize_clip, rasterize_depth_clip  # noqa: E402
 from jaxrender.raster.rasterize import rasterize_donating, rasterize_program  # noqa: E402
 from jaxrender.scene.mesh import terrain_mesh  # noqa: E402
@@ -184,7 +184,7 @@ def case_row(case, a, jr_cases, gl_cases, gl) -> dict:
 
 
 def parse_args(argv=None) -> argparse.Namespace:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+    ap = argparse.ArgumentParser(description=help_summary(__doc__),
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--jaxrenderer-cases", type=cases_arg, help="WxH:triangles,... (default: "
                     "1920x1080:2500,640x360:10000)")

@@ -14,7 +14,7 @@ import argparse
 
 from jaxrender.bench.pipelines import time_pipelines
 from jaxrender.bench.report import print_table
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import help_summary, resolution_arg
 from jaxrender.timing import environment
 
 DEFAULT_VARIANTS = ("forward", "forward:z_prepass=true", "deferred", "visbuffer",
@@ -24,7 +24,7 @@ COLUMNS = ["scene", "pipeline", "median_ms", "compile_s", "shade_invocations", "
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["foliage", "room", "spheres"],
                     help="names or name:key=value,...")
     ap.add_argument("--variants", nargs="+", default=list(DEFAULT_VARIANTS),

@@ -16,6 +16,7 @@ import dataclasses
 
 import jax
 
+from jaxrender.parsing import help_summary
 from jaxrender.pipelines import get_pipeline, program
 from jaxrender.pipelines.reference import ReferenceConfig, ldr_psnr
 from jaxrender.scene import default_camera, list_builtin_scenes
@@ -63,7 +64,7 @@ def convergence(scenes, width, height, ks) -> None:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["spheres"],
                     help=f"built-in scenes or scene files; 'all' = "
                          f"{', '.join(n for n, _ in list_builtin_scenes())}")

@@ -20,7 +20,7 @@ import numpy as np
 from jaxrender import parallel
 from jaxrender.bench.raster import terrain_camera
 from jaxrender.bench.report import dump, print_table
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import help_summary, resolution_arg
 from jaxrender.timing import environment, time_first_call
 from jaxrender.raster import rasterize
 from jaxrender.scene.camera_path import frame, orbit
@@ -105,7 +105,7 @@ def dacs_sweep_rows(scene, camera, width, height, thresholds, repeats, chunk):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scene", default="terrain", help="built-in scene for the pipeline cases")
     ap.add_argument("--pipelines", nargs="*", default=["forward", "visbuffer"])
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")

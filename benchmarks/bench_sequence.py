@@ -33,7 +33,7 @@ if not any((Path(p) / "jaxrender").is_dir()
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from jaxrender.bench.report import print_table  # noqa: E402
-from jaxrender.parsing import parse_spec, resolution_arg  # noqa: E402
+from jaxrender.parsing import help_summary, parse_spec, resolution_arg  # noqa: E402
 from jaxrender.timing import environment, time_call  # noqa: E402
 from jaxrender.pipelines import list_pipelines, make_config, program  # noqa: E402
 from jaxrender.scene.camera_path import pan  # noqa: E402
@@ -68,7 +68,7 @@ def _checksum(frames) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["terrain", "foliage"])
     ap.add_argument("--pipelines", nargs="+", default=None,
                     help="names or 'name:key=value,...' config variants; default: every "

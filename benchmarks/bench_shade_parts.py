@@ -26,7 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from bench_cost_layers import covered_points
-from jaxrender.parsing import resolution_arg
+from jaxrender.parsing import help_summary, resolution_arg
 from jaxrender.scene import default_camera
 from jaxrender.shading import load_lit_scene, shade, surface_points
 from jaxrender.timing import device_description, time_call
@@ -68,7 +68,7 @@ def point_sized_writes(hlo: str, n: int) -> tuple[int, float]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["room"])
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--repeats", type=int, default=15)

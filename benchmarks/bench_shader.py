@@ -23,7 +23,7 @@ import jax.numpy as jnp
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from profile_kernels import profile_call  # noqa: E402
 
-from jaxrender.parsing import parse_spec, resolution_arg  # noqa: E402
+from jaxrender.parsing import help_summary, parse_spec, resolution_arg  # noqa: E402
 from jaxrender.pipelines import make_config  # noqa: E402
 from jaxrender.pipelines.visibility import visibility  # noqa: E402
 from jaxrender.scene import default_camera  # noqa: E402
@@ -40,7 +40,7 @@ def screen_shader(scene, camera, vis):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["room"])
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--calls", type=int, default=5)

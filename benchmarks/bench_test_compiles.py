@@ -84,7 +84,7 @@ def run_variant(flags: str, pipelines: list[str], out: Path) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("--pipelines", nargs="+", default=list(PIPELINES), choices=PIPELINES)
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS)[:2], choices=list(VARIANTS),
                     help="the flag sets to compare (default: the suite's and -O0 alone)")

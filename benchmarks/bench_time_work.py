@@ -24,7 +24,7 @@ import time
 import jax
 import numpy as np
 
-from jaxrender.parsing import parse_spec, resolution_arg
+from jaxrender.parsing import help_summary, parse_spec, resolution_arg
 from jaxrender.study.shader_cost import shading_work
 from jaxrender.study.time_fit import fit_line
 from jaxrender.timing import block, device_description, time_call
@@ -120,7 +120,7 @@ def fit(rows):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["foliage", "terrain"])
     ap.add_argument("--pipelines", nargs="+", default=list(DEFAULT_PIPELINES))
     ap.add_argument("--costs", nargs="+", type=int, default=[0, 8, 32])

@@ -37,7 +37,7 @@ if not any((Path(p) / "jaxrender").is_dir()
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # its sibling, profile_kernels
-from jaxrender.parsing import resolution_arg  # noqa: E402
+from jaxrender.parsing import help_summary, resolution_arg  # noqa: E402
 from profile_kernels import pipeline_case  # noqa: E402
 
 TARGETS = Path(__file__).resolve().parent / "targets"
@@ -121,7 +121,7 @@ def program_text(scene, camera, pipe, cfg, target: Path) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("what", help="a pipeline name (forward, deferred, dacs, ...)")
     ap.add_argument("--scene", default="foliage")
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")

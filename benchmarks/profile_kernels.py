@@ -21,7 +21,7 @@ import time
 
 import jax
 
-from jaxrender.parsing import parse_settings, parse_spec, resolution_arg
+from jaxrender.parsing import help_summary, parse_settings, parse_spec, resolution_arg
 from jaxrender.timing import device_description
 
 _HOST_NOISE = ("ThreadpoolListener", "end: ", "ThunkExecutor", "$", "PjitFunction")
@@ -191,7 +191,7 @@ def pipeline_case(what: str, scene_spec: str, width: int, height: int, settings:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("what", help="'raster' or a pipeline name (forward, deferred, ...)")
     ap.add_argument("--resolution", type=resolution_arg, default="1920x1080")
     ap.add_argument("--triangles", type=int, default=164_000, help="terrain size for 'raster'")

@@ -76,3 +76,14 @@ def parse_spec(text: str, where: str = "spec") -> tuple[str, dict]:
     """'name' or 'name:key=value,key=value' -> (name, {key: value}), as ``parse_setting``."""
     name, _, rest = text.partition(":")
     return name.strip(), parse_settings(filter(None, rest.split(",")), f"{where} {text!r}:")
+
+
+def help_summary(doc: str) -> str:
+    """A command's ``--help`` description from its module docstring: the first paragraph,
+    joined into one line (argparse wraps it), so that it never stops mid-sentence."""
+    lines = []
+    for line in (doc or "").strip().splitlines():
+        if not line.strip():
+            break
+        lines.append(line.strip())
+    return " ".join(lines)

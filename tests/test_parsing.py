@@ -5,8 +5,8 @@ import argparse
 import pytest
 
 from jaxrender.errors import UserError
-from jaxrender.parsing import (MAX_SIDE, parse_resolution, parse_setting, parse_settings,
-                               parse_spec, resolution_arg)
+from jaxrender.parsing import (MAX_SIDE, help_summary, parse_resolution, parse_setting,
+                               parse_settings, parse_spec, resolution_arg)
 
 
 @pytest.mark.parametrize("bad", ["64", "64x", "x48", "64x48x2", "-4x4", "0x4", "4.5x4",
@@ -40,3 +40,15 @@ def test_spec_splits_name_and_settings():
     assert parse_spec(" forward ") == ("forward", {})
     with pytest.raises(UserError, match="scene 'x:n': 'n': expected key=value"):
         parse_spec("x:n", "scene")
+
+
+def test_help_summary_is_the_docstrings_first_paragraph_on_one_line():
+    doc = """Frame time against shading work: every pipeline on a few scenes, and
+    each pipeline's fixed cost.
+
+        python benchmarks/bench_time_work.py --scenes foliage
+    """
+    assert help_summary(doc) == ("Frame time against shading work: every pipeline on a few "
+                                 "scenes, and each pipeline's fixed cost.")
+    assert help_summary("One line.") == "One line."
+    assert help_summary(None) == ""

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import argparse
 
-from jaxrender.parsing import positive_int_arg, resolution_arg
+from jaxrender.parsing import help_summary, positive_int_arg, resolution_arg
 
 SECTIONS = ("raster", "pipelines", "metrics")
 
@@ -121,5 +121,5 @@ def run(a: argparse.Namespace) -> int:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="jaxrender bench", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="jaxrender bench", description=help_summary(__doc__))
     return run(add_arguments(p).parse_args(argv))
