@@ -31,8 +31,6 @@ import jax
 from jax.extend.core import ClosedJaxpr, Literal
 import numpy as np
 
-from jaxrender.parsing import help_summary
-
 # Primitives that call one jaxpr with their own operands: followed inside, so the loops they
 # hold are counted. Any other primitive is bound whole; one that holds a loop or a branch in
 # a jaxpr of its own is refused (``held_reads``), so that no read goes uncounted.
@@ -242,7 +240,7 @@ def main(argv=None) -> int:
     from pathlib import Path
 
     from jaxrender.bench.report import print_table
-    from jaxrender.parsing import parse_spec, resolution_arg
+    from jaxrender.parsing import help_summary, parse_spec, resolution_arg
 
     ap = argparse.ArgumentParser(description=help_summary(__doc__))
     ap.add_argument("--scenes", nargs="+", default=["room", "foliage", "thin", "glass"])
