@@ -189,6 +189,7 @@ CASES: dict[str, dict[str, Case]] = {
         "bias_relax": Case(F, FEEDBACK, 0.25, **SEQ),
     },
     "tads": {
+        **_blending(**SEQ),
         "cull_backfaces": Case(F, {}, True, **SEQ),
         "aniso_taps": Case(F, {}, 4, **SEQ),
         "shade_every": Case(F, {}, 2, **SEQ),
