@@ -54,6 +54,10 @@ for part in $*; do
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 $S --scenes glass --pipelines tads deferred \
       --json "$OUT/tads_glass.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/tads_glass.md"
     bundle_out
+    if [ ! -d .v/s34/jaxrender ]; then
+      echo "no .v/s34: mkdir -p .v/s34 && git archive 21322fd jaxrender | tar -x -C .v/s34"
+      exit 1
+    fi
     S="$S --frames 16 --rounds 5"
     side_by_side fwdroom 60 "s34 after" --scenes room --pipelines forward
   elif [ "$part" = abba35 ]; then
