@@ -41,7 +41,7 @@ def simulate_level(need: Array, width: int, batches: int) -> dict:
     groups = jnp.concatenate([need, jnp.zeros((pad,), bool)]).reshape(warps * batches, width)
     pushes = jnp.sum(groups.reshape(warps, per_warp), axis=1, dtype=jnp.int32)
     i32 = lambda a: jnp.sum(a, dtype=jnp.int32)
-    # The warp's search steps: its groups of ``width`` that hold a pixel of the level.
+    # The level's search steps, over all its warps: its groups of ``width`` pixels.
     search = jnp.int32(-(-n // width))
     shade = i32((pushes + width - 1) // width)
     # The warps launched: the level's pixels in runs of per_warp, one warp per run.

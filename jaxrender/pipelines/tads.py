@@ -1,5 +1,6 @@
 """Texture-aligned deferred shading (TADS, Timothy Lottes 2012): shading aligned to the texels
-of the surface, filtered after shading, in one geometry pass.
+of the surface, filtered after shading, in one geometry pass (and, on a scene with blended
+surfaces, the forward transparent pass after it).
 
   object_space's charts and sheets, packed in one virtual texture (tads_layout, ``prepare``)
   -> geometry pass: the G-buffer of physical positions and footprint gradients (tads_samples)

@@ -26,11 +26,12 @@ from jaxrender.raster.work_items import (Triangles, WorkChunk, chunk_items, item
 from jaxrender.types import Array
 
 TRAVERSALS = ("bbox", "spans", "recompute")
+PEELS = (False, True, "first")
 
 
 def for_each_chunk(
     tris: Triangles, setup: SetupFn, capacity: int, offset: Array, state,
-    fn: Callable[[object, WorkChunk], object], traversal: str, peel: bool = False,
+    fn: Callable[[object, WorkChunk], object], traversal: str, peel: bool | str = False,
     then: tuple | None = None,
 ):
     """Run ``state = fn(state, chunk)`` over the work items of ``tris``, in chunks (dynamic
@@ -39,12 +40,15 @@ def for_each_chunk(
     traversals also hand it uncovered items, masked by ``covered``). ``traversal``: "bbox"
     (every bounding-box pixel is an item, tested by the edge functions; setup stored),
     "recompute" (the same items, setup recomputed per item) or "spans" (exact per-row spans;
-    see ``spans.py``); ``raster.rasterize.traverse`` picks one per platform. ``peel``: the box
-    traversals run their first chunk outside the loop and join ``then`` into it (see
-    ``_chunk_loop``). ``then``: more work after the chunks, (n: int64 scalar, body(k, (state,
-    items)) -> (state, items)) for k in [0, n); its items are added to the count."""
+    see ``spans.py``); ``raster.rasterize.traverse`` picks one per platform. ``peel`` (one of
+    PEELS): the box traversals run their first chunk outside the loop and join ``then`` into
+    it (True), or run ``then`` in a loop of its own ("first"; see ``_chunk_loop``). ``then``:
+    more work after the chunks, (n: int64 scalar, body(k, (state, items)) -> (state, items))
+    for k in [0, n); its items are added to the count."""
     if traversal not in TRAVERSALS:
         raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
+    if peel not in PEELS:
+        raise ValueError(f"peel must be one of {PEELS}, got {peel!r}")
     if traversal == "recompute":
         return _for_each_recompute_chunk(tris, setup, capacity, offset, state, fn, peel, then)
     su = setup(*tris.gather(), offset)

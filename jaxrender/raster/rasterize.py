@@ -244,8 +244,9 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
     ``coverage.TRAVERSALS`` everywhere (test hooks). ``peel="first"``: "gpu" runs the first
     chunk unconditionally, the other chunks and the clip chunks in two plain loops, for a
     state too large to pass through the conditional that joins them (XLA copies the state
-    into and out of it at every step); ``peel=False``: every chunk in the loop.
-    """
+    into and out of it at every step); ``peel=False``: every chunk in the loop. Each clip
+    chunk covers its fans with the same peel, so with any peel it runs one chunk of their
+    items, masked if they cover nothing."""
     if traversal not in TRAVERSALS:
         raise ValueError(f"traversal must be one of {TRAVERSALS}, got {traversal!r}")
     if traversal == "auto":

@@ -74,6 +74,25 @@ def test_spans_list_the_same_fragments_in_the_same_order(rng):
                                           err_msg=f"{tr}: {name}")
 
 
+def test_fragment_lists_of_clipped_triangles_in_small_chunks_match_the_boxes(rng):
+    # The GPU's fragment traversal peels its first chunk alone, and so does each clip chunk's
+    # coverage of its fans: with near-plane crossings and chunks far smaller than the work,
+    # both run many chunks and clip chunks, and must list what the bounding boxes list.
+    p = rng.uniform(-3, 3, (300, 3))
+    p[:, 2] = rng.uniform(-6, 1, 300)
+    clip, faces = pad(gl_clip(p, aspect=W / H), np.arange(300).reshape(-1, 3).astype(np.int32))
+    out = {tr: fragments_jit(jnp.asarray(clip), jnp.asarray(faces), width=W, height=H,
+                             capacity=16 * W * H, cull_backfaces=False, offset=(128, 128),
+                             work_capacity=512, clip_capacity=3, traversal=tr)
+           for tr in ("bbox", "gpu")}
+    n = int(out["bbox"].count)
+    assert 0 < n <= 16 * W * H and int(out["gpu"].count) == n
+    for name in ("pixel", "tri", "depth"):
+        np.testing.assert_array_equal(np.asarray(getattr(out["gpu"], name))[:n],
+                                      np.asarray(getattr(out["bbox"], name))[:n],
+                                      err_msg=f"gpu against bbox: {name}")
+
+
 @pytest.mark.parametrize("traversal", ["bbox", "recompute"])
 def test_peeled_first_chunk_changes_nothing(rng, traversal):
     # The GPU runs a box traversal's first chunk outside its loop and the later chunks and the
@@ -164,3 +183,11 @@ def test_sample_visibility_is_the_rasterizers_per_sample_core(rng):
     assert int(odd_counts["fragments"]) == int(counts["fragments"])  # counted before the test
     assert int(odd_counts["keep_tests"]) == int(counts["fragments"]), "tests keep said it ran"
     assert "keep_tests" not in counts
+
+
+def test_an_unknown_peel_is_refused():
+    from jaxrender.raster.coverage import PEELS, for_each_chunk
+
+    with pytest.raises(ValueError, match="peel must be one of") as e:
+        for_each_chunk(None, None, 64, None, None, None, "bbox", peel="frist")
+    assert all(repr(p) in str(e.value) for p in PEELS), str(e.value)
