@@ -34,6 +34,11 @@
 #   fewer), deferred and forward 0.02-0.06 (one host read fewer a fragment list); after
 #   against wp, deferred, DACS and forward 0.05-0.12 faster (the sort's gather).
 . "$(dirname "$0")/gpu_env.sh"
+# JAX's persistent cache for the side-by-side parts: a tree's second pass loads its programs.
+cached_compiles() {
+  export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+    JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+}
 for part in $*; do
   if [ "$part" = targets ]; then
     OUT=$OUT bash benchmarks/gpu_thirty_fourth.sh targets
@@ -43,13 +48,11 @@ for part in $*; do
       --repeats 5 --budget 220 --out "$OUT/fits.jsonl" 2>&1 | quiet | grep -v '^{' \
       | tee -a "$OUT/fits.md"
   elif [ "$part" = after35 ]; then
-    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
-      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    cached_compiles
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side after35 220 "s34 wp after" --scenes glass --pipelines deferred dacs forward
   elif [ "$part" = last35 ]; then
-    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
-      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    cached_compiles
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 $S --scenes glass --pipelines tads deferred \
       --json "$OUT/tads_glass.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/tads_glass.md"
@@ -61,8 +64,7 @@ for part in $*; do
     S="$S --frames 16 --rounds 5"
     side_by_side fwdroom 60 "s34 after" --scenes room --pipelines forward
   elif [ "$part" = abba35 ]; then
-    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
-      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    cached_compiles
     S="python3 benchmarks/bench_sequence.py --frames 16 --rounds 5 --no-single --outputs images"
     ORDERS=${ORDERS:-2} side_by_side abba35 150 "s34 after" --scenes glass --pipelines \
       ${PIPES:-deferred dacs forward}
