@@ -2,8 +2,9 @@
 # wheels (.whl/: trimesh, colour-science, xatlas) installed into /tmp/site, unbuffered output,
 # no GPU preallocation, quiet() to drop XLA's log lines, trees() and side_by_side() to run the
 # sequence bench in several trees side by side, prof() for a program's kernels by scope,
-# layer_bench() for the shader-cost layers bench, bundle_out() to pack $OUT into one file, and
-# targets_first() to run issue 23's rows first on an H200.
+# layer_bench() for the shader-cost layers bench, time_work() for the time-work fits,
+# bundle_out() to pack $OUT into one file, and targets_first() to run issue 23's rows first on
+# an H200.
 set -u
 OUT=${OUT:?OUT must name an output folder}
 mkdir -p "$OUT"
@@ -50,6 +51,14 @@ prof() {  # prof PIPELINE SCENE SECONDS SCOPE...: the pipeline's kernels on SCEN
   PYTHONPATH=$PWD:/tmp/site timeout -k 5 "$limit" python3 benchmarks/profile_kernels.py "$pipe" \
     --scene "$scene" --top 25 --calls 3 $(printf -- '--scope %s ' "$@") 2>&1 | quiet \
     | tee -a "$OUT/profile.md"
+}
+# time_work NAME SECONDS ARGS...: bench_time_work.py with ARGS, its rows in $OUT/NAME.jsonl and
+# its fits in $OUT/NAME.md.
+time_work() {
+  local name=$1 limit=$2
+  shift 2
+  PYTHONPATH=$PWD:/tmp/site timeout -k 5 "$limit" python3 benchmarks/bench_time_work.py "$@" \
+    --out "$OUT/$name.jsonl" 2>&1 | quiet | grep -v '^{' | tee -a "$OUT/$name.md"
 }
 # layer_bench FILE LABEL [FLAG]: the layers bench (bench_cost_layers.py) in $TREE (default this
 # checkout), its rows in $OUT/FILE.jsonl and its table in $OUT/FILE.md.

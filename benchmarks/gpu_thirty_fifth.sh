@@ -43,10 +43,8 @@ for part in $*; do
   if [ "$part" = targets ]; then
     OUT=$OUT bash benchmarks/gpu_thirty_fourth.sh targets
   elif [ "$part" = fits ]; then
-    PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 python3 benchmarks/bench_time_work.py \
-      --scenes foliage --pipelines visibility deferred dacs --costs 0 256 --frames 8 \
-      --repeats 5 --budget 220 --out "$OUT/fits.jsonl" 2>&1 | quiet | grep -v '^{' \
-      | tee -a "$OUT/fits.md"
+    time_work fits 240 --scenes foliage --pipelines visibility deferred dacs --costs 0 256 \
+      --frames 8 --repeats 5 --budget 220
   elif [ "$part" = after35 ]; then
     cached_compiles
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
