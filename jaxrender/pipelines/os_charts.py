@@ -6,7 +6,7 @@ triangle of non-zero world area has non-zero uv area, and no two uv triangles ov
 exactly with the watertight fill rules: no texel centre of a 256^2 grid is covered twice).
 They are fitted into the unit square with one uniform scale (tiling uvs such as a floor with
 uv_scale 3 are fine). Otherwise xatlas generates charts (padding 2 texels). Results are cached
-by a hash of the mesh content, so a camera move never recomputes them.
+per object by a hash of the mesh content, so a camera move never recomputes them.
 """
 
 from __future__ import annotations
@@ -88,30 +88,40 @@ def scene_key(scene, *extra) -> str:
     return h.hexdigest()
 
 
-def object_charts(scene, xatlas_resolution: int = 1024, force_xatlas: bool = False
-                  ) -> list[ObjectChart]:
-    """One ObjectChart per object id 0 .. max(tri_object) (cached by mesh content)."""
+def _chart(pos, uvs, faces, tris, xatlas_resolution, force_xatlas) -> ObjectChart:
+    """The chart of one object's triangles ``tris`` (non-empty)."""
+    f = faces[tris]
+    own, ext = _fit_unit(uvs[f], margin=0.0)
+    if not force_xatlas and own_uvs_unique(own, tri_area2(pos[f])):
+        return ObjectChart(tris, own, "own", ext)
+    return ObjectChart(tris, xatlas_chart(pos, f, xatlas_resolution), "xatlas", ext)
+
+
+def object_charts(scene, xatlas_resolution: int = 1024, force_xatlas: bool = False,
+                  objects=None) -> list[ObjectChart]:
+    """One ObjectChart per object id 0 .. max(tri_object) (cached by mesh content). Only the
+    objects ``objects`` (ids; None: all) are charted; any other one gets an empty chart (no
+    triangles): TADS does not chart blended-only objects. An object's chart depends on its
+    own triangles alone, so charts are cached per object and shared between such subsets."""
     key = scene_key(scene, "charts", xatlas_resolution, force_xatlas)
-    if key in _CACHE:
-        _CACHE.move_to_end(key)
-        return _CACHE[key]
+    done = _CACHE.setdefault(key, {})
+    _CACHE.move_to_end(key)
+    while len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
     pos = np.asarray(scene.positions, np.float64)
     uvs = np.asarray(scene.uvs, np.float64)
     faces = np.asarray(scene.faces, np.int64)
     obj = np.asarray(scene.tri_object, np.int64)
     n_obj = int(obj.max()) + 1 if obj.size else 0
+    wanted = set(range(n_obj)) if objects is None else {int(o) for o in objects}
+    empty = ObjectChart(np.zeros(0, np.int64), np.zeros((0, 3, 2)), "own", 1.0)
     out = []
     for o in range(n_obj):
         tris = np.nonzero(obj == o)[0]
-        f = faces[tris]
-        own, ext = _fit_unit(uvs[f], margin=0.0)
-        if not force_xatlas and tris.size and own_uvs_unique(own, tri_area2(pos[f])):
-            out.append(ObjectChart(tris, own, "own", ext))
-        elif tris.size:
-            out.append(ObjectChart(tris, xatlas_chart(pos, f, xatlas_resolution), "xatlas", ext))
-        else:
-            out.append(ObjectChart(tris, np.zeros((0, 3, 2)), "own", 1.0))
-    _CACHE[key] = out
-    while len(_CACHE) > _CACHE_SIZE:
-        _CACHE.popitem(last=False)
+        if o not in wanted or not tris.size:
+            out.append(empty)
+            continue
+        if o not in done:
+            done[o] = _chart(pos, uvs, faces, tris, xatlas_resolution, force_xatlas)
+        out.append(done[o])
     return out

@@ -2,7 +2,8 @@
 of the surface, filtered after shading, in one geometry pass (and, on a scene with blended
 surfaces, the forward transparent pass after it).
 
-  object_space's charts and sheets, packed in one virtual texture (tads_layout, ``prepare``)
+  object_space's charts and sheets of the objects with a face that does not blend, packed in
+  one virtual texture (tads_layout, ``prepare``)
   -> geometry pass: the G-buffer of physical positions and footprint gradients (tads_samples)
   -> find unique samples: each pixel's 1-4 bilinear texels (4 per anisotropic tap), minus those
      of its N, NW and W neighbours: a mask per pixel
@@ -12,7 +13,8 @@ surfaces, the forward transparent pass after it).
      position (``aniso_taps`` taps along the gradient)
   -> blended surfaces, on a scene with them: the forward transparent pass over the filtered
      image, as deferred's (``transparency.transparent_pass``; its settings from
-     ``BlendingConfig``). The charts are the scene's, the blended meshes' included.
+     ``BlendingConfig``). Blended faces are never shaded into the shade texture, so an object
+     whose faces all blend has no chart and no texel (``os_sheet.build_sheet(opaque_only)``).
 
 State: the shade texture float32[texels, 3] and the frame each texel was last shaded
 int32[texels] (-1 never). With ``shade_every = N`` a texel is shaded when it was never shaded
@@ -236,8 +238,10 @@ def tads_counts(static: TadsStatic, cfg: TadsConfig, fp, smp: Samples, due, work
         duplicates_removed=jnp.sum(smp.distinct & smp.claimed & due, dtype=jnp.int32),
         duplicates_missed=inv - unique,
         gbuffer_bytes=gbuffer_bytes,
-        # float: a scene's charts can need more than 2^31 bytes (thin at 1920x1080: 2.4 GB)
-        shade_texture_bytes=jnp.float32(n_tex * (TEXEL_BYTES + COUNTER_BYTES)),
+        # float: a scene's charts can need more than 2^31 bytes (thin at 1920x1080: 2.4 GB).
+        # Without the spare chunk of a scene whose faces all blend: no object's texels.
+        shade_texture_bytes=jnp.float32((n_tex - static.sheet.spare_chunks * LANES)
+                                        * (TEXEL_BYTES + COUNTER_BYTES)),
         taps_read=taps_read, stale_taps=out.stale, missing_taps=out.missing,
         alpha_invocations=vis.counts["alpha_invocations"], overflow=out.overflow, **hist)
     aux = {"sample_class": jnp.where(fp.covered, per_pixel, -1).reshape(h, w),

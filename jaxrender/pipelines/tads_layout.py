@@ -3,11 +3,14 @@ level-0 shade sheet of every object, so that a pixel's "physical position" alone
 texels its filter reads.
 
 The objects' sheets are object_space's (``os_sheet.build_sheet``: charts, power-of-two sheets,
-MIP chains, triangle-id maps). Their level-0 squares are packed into one virtual texture of at
-most ``VIRTUAL_SIZE`` texels a side, largest first in Morton order (power-of-two squares taken
-largest first tile a Morton curve without gaps, each one aligned to its own size). A page
-table of 8x8-texel pages names the object under each page; the MIP levels of an object are
-addressed through the object (its sheet's ``obj_base``), as a virtual-texture page table would.
+MIP chains, triangle-id maps), for the objects with a face that does not blend only: blended
+faces are drawn by the forward transparent pass and never shaded into a sheet, so an object
+whose faces all blend gets no chart, no sheet and no place here. Their level-0 squares are
+packed into one virtual texture of at most ``VIRTUAL_SIZE`` texels a side, largest first in
+Morton order (power-of-two squares taken largest first tile a Morton curve without gaps, each
+one aligned to its own size). A page table of 8x8-texel pages names the object under each
+page; the MIP levels of an object are addressed through the object (its sheet's ``obj_base``),
+as a virtual-texture page table would.
 
 A physical position is an int32 per axis: level-0 virtual texels in fixed point with
 ``SUBTEXEL_BITS`` = 8 fractional bits (14 integer bits for 16384 texels), the precision of the
@@ -16,7 +19,8 @@ position reproduces the filter of the exact one (tests/pipelines/test_tads.py ch
 
 Unsupported inputs are refused on the host, naming the object: a chart that is not usable
 (non-finite, outside the unit square, or a triangle of non-zero world area flattened to no
-chart area) and level-0 sheets whose total area exceeds the virtual texture.
+chart area) and level-0 sheets whose total area exceeds the virtual texture (blended-only
+objects have neither, so they are never the cause).
 """
 
 from __future__ import annotations
@@ -53,14 +57,18 @@ def object_label(scene, o: int, n_tris: int) -> str:
 
 
 def check_charts(scene, sheet: ShadeSheet) -> None:
-    """Raise ValueError naming the first object whose chart cannot address its surface."""
+    """Raise ValueError naming the first object whose chart cannot address its surface (an
+    object without a sheet, ``obj_res`` 0, has no chart to check: nothing reads one)."""
     corner = np.asarray(sheet.corner_st, np.float64)
     pos = np.asarray(scene.positions, np.float64)[np.asarray(scene.faces)]
     obj = np.asarray(scene.tri_object)
     world = tri_area2(pos)
     chart = tri_area2(corner)
     scale = max(float(world.max(initial=0.0)), 1e-30)
+    res = np.asarray(sheet.obj_res)
     for o in range(int(obj.max(initial=-1)) + 1):
+        if res[o] == 0:
+            continue
         sel = obj == o
         c = corner[sel]
         why = None
@@ -85,10 +93,13 @@ def _morton_xy(index: int) -> tuple[int, int]:
 
 def pack_virtual(res: list[int], labels: list[str], size: int = VIRTUAL_SIZE) -> np.ndarray:
     """Origins int64[O, 2] of power-of-two squares of sides ``res`` in a ``size``^2 virtual
-    texture, largest first along a Morton curve; raises naming the first object past its end."""
+    texture, largest first along a Morton curve; raises naming the first object past its end.
+    A side of 0 (an object without a sheet) takes no place; its origin (0, 0) is never read."""
     origin = np.zeros((len(res), 2), np.int64)
     at = 0
     for o in sorted(range(len(res)), key=lambda k: (-res[k], k)):
+        if res[o] == 0:
+            continue
         if at + res[o] ** 2 > size * size:
             raise ValueError(f"tads: {labels[o]}'s {res[o]}^2 sheet does not fit the "
                              f"{size}^2 virtual texture (the sheets need "
@@ -100,8 +111,9 @@ def pack_virtual(res: list[int], labels: list[str], size: int = VIRTUAL_SIZE) ->
 
 
 def build_static(scene, cfg) -> TadsStatic:
-    """Sheets, virtual-texture origins and page table of ``scene`` (host side)."""
-    sheet = build_sheet(scene, cfg)
+    """Sheets, virtual-texture origins and page table of ``scene`` (host side); objects whose
+    faces all blend get no sheet."""
+    sheet = build_sheet(scene, cfg, opaque_only=True)
     check_charts(scene, sheet)
     res = [int(r) for r in np.asarray(sheet.obj_res)]
     obj = np.asarray(scene.tri_object)

@@ -76,7 +76,9 @@ def decode(gbuf: Array, static: TadsStatic, aniso_taps: int) -> Footprint:
                     0)
     covered = covered & (obj >= 0)
     obj = jnp.maximum(obj, 0)
-    rf = static.sheet.obj_res[obj].astype(jnp.float32)[:, None]
+    # At least 1: an uncovered pixel's stand-in object 0 may have no sheet (res 0), and its
+    # chart point, unused, should not be 0 / 0.
+    rf = jnp.maximum(static.sheet.obj_res[obj], 1).astype(jnp.float32)[:, None]
     st = (pos - static.origin[obj] * SUBTEXEL).astype(jnp.float32) / (rf * SUBTEXEL)
     grad = gbuf[:, 2:4]
     if aniso_taps > 1:
