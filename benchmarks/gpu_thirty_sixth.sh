@@ -15,6 +15,18 @@
 #   glass within 0.1 of blocks (23% more lanes against five reads fewer).
 # last35: gpu_thirty_fifth.sh's (TADS on glass beside deferred; forward on room, s34 against
 #   this tree, A B B A).
+# Call 1 ran `fwdprof fwdmodes last35` on an H100 (RESULTS.md, thirty-sixth session). Call 2
+#   (carry [".whl", ".v/base36"]; .v/base36 from `git archive 8c6a21f jaxrender`):
+#   bash benchmarks/gpu_thirty_sixth.sh rowsprof rows36
+# rowsprof: this tree's forward on glass and room and deferred on glass, kernels by scope, for
+#   call 1's profiles of 8c6a21f's forward: shader results computed whole (fusion.whole_rows)
+#   before the dispatch's scatter and the composite's gather, which had fused the shader and
+#   ran it once per channel (the offline H100 program: the lights inside the scatter, 372 of
+#   its 535 instructions), and materialize a barrier on a GPU. Predicted: forward's shade
+#   scope 1.48 -> 0.7-0.9 ms on glass, 1.19 -> 0.7-0.8 on room; deferred's composite on glass
+#   0.41 -> 0.25-0.3 (its 0.205 ms gather held the layer shader).
+# rows36: base36 against this tree, A B B A: deferred, forward, the visibility buffer and
+#   checkerboard on glass and room.
 # On an H200, `targets` (issue 23's rows) runs first (gpu_env.sh's targets_first).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
@@ -29,6 +41,20 @@ for part in $(targets_first "$*"); do
         room --pipelines forward 2>&1 | quiet | grep '^|' | sed "s/^/$mode: /" \
         | tee -a "$OUT/fwdmodes.md"
     done
+  elif [ "$part" = rowsprof ]; then
+    for case in "forward glass" "forward room" "deferred glass"; do
+      set -- $case
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py "$1" \
+        --scene "$2" --top 20 --calls 3 --scope-top 5 $(printf -- '--scope %s ' fragments \
+        depth_test shade lighting gbuffer transparent layer_shading composite sorted_blend) \
+        2>&1 | quiet | tee -a "$OUT/rowsprof.md"
+    done
+  elif [ "$part" = rows36 ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side rows36 150 "base36 after" --scenes glass room --pipelines deferred forward \
+      visbuffer checkerboard
   elif [ "$part" = fwdprof ]; then
     for scene in glass room; do
       PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/profile_kernels.py forward \

@@ -51,13 +51,31 @@ def any_small(x: Array, axis: int = -1) -> Array:
     return functools.reduce(operator.or_, _slices(x, axis, False))
 
 
+def whole_rows(tree):
+    """``tree`` (an array or a pytree of them) computed by kernels of its own, for a consumer
+    that reads it in rows: a scatter, or a gather in another order.
+
+    A scatter or gather that fuses its operand's computation evaluates it once per element it
+    moves: for a shader's [N, C] result, C times a point, every term the channels share (the
+    lights, the texture's filter) included, and a gather evaluates it at the gathered points.
+    Computed on its own, the result is a fusion whose root is its channels' concatenation,
+    which evaluates all the channels of a point in one thread. On a GPU
+    ``lax.optimization_barrier`` keeps the computation out of the consumer's kernel (the CPU
+    pipeline removes barriers before fusion, where this is a no-op)."""
+    return lax.optimization_barrier(tree)
+
+
 def materialize(x: Array) -> Array:
     """``x``, stored once: its consumers read it instead of each fusing its computation.
 
-    ``lax.optimization_barrier`` cannot do this (XLA removes it before fusion). A scatter is
-    never fused into its consumers, and a scatter onto distinct rows in order is a copy."""
-    rows = jnp.arange(x.shape[0], dtype=jnp.int32)
-    return jnp.zeros_like(x).at[rows].set(x, unique_indices=True, indices_are_sorted=True)
+    ``lax.optimization_barrier`` cannot do this on a CPU (XLA removes it there before
+    fusion). A scatter is never fused into its consumers, and a scatter onto distinct rows in
+    order is a copy."""
+    def scattered(x):
+        rows = jnp.arange(x.shape[0], dtype=jnp.int32)
+        return jnp.zeros_like(x).at[rows].set(x, unique_indices=True, indices_are_sorted=True)
+
+    return lax.platform_dependent(x, cpu=scattered, default=lax.optimization_barrier)
 
 
 def materialize_all(*arrays: Array) -> tuple[Array, ...]:

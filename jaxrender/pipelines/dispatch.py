@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrender.compaction import compact_indices
+from jaxrender.fusion import whole_rows
 from jaxrender.types import Array, pytree_dataclass, static_field
 
 DEFAULT_CHUNK = 0  # auto: see auto_chunk
@@ -210,7 +211,8 @@ def run(work: WorkList, fn: Callable[[Array, Array], Array], out: Array,
     def launch(start, size, acc):
         lane_items = jax.lax.dynamic_slice(padded, (start,), (size,))
         live = start + jnp.arange(size, dtype=jnp.int32) < n
-        return _scatter(acc, jnp.where(live, lane_items, sentinel), fn(lane_items, live))
+        vals = whole_rows(fn(lane_items, live))  # not once per channel inside the scatter
+        return _scatter(acc, jnp.where(live, lane_items, sentinel), vals)
 
     out, launched = _launch(_chunks_of(n, chunk), max_chunks, chunk, launch, out, mode)
     return out, WorkList(items, n, n, chunk, launched)
@@ -263,6 +265,7 @@ def dispatch_lanes(
         lanes = start + jnp.arange(size, dtype=jnp.int32)
         live = lanes < n
         dest, vals, write = fn(lanes, live)
+        vals = whole_rows(vals)
         ok = live & write
         acc = acc.at[jnp.where(ok, dest, sentinel)].set(vals, mode="drop")
         return acc, wrote + jnp.sum(ok, dtype=jnp.int32)
@@ -313,7 +316,8 @@ def shade_dense(
             live = jnp.arange(size, dtype=jnp.int32) < count
             pts = points_of(items)
             pts = dataclasses.replace(pts, valid=pts.valid & live)
-            return _scatter(acc, jnp.where(live, items, n), shade_fn(pts), unique_indices=True)
+            return _scatter(acc, jnp.where(live, items, n), whole_rows(shade_fn(pts)),
+                            unique_indices=True)
         return launch
 
     # 0: nothing; 1 + i: the i-th size; 1 + len(sizes): in place.

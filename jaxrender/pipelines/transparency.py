@@ -41,6 +41,7 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.compaction import compact_indices
+from jaxrender.fusion import whole_rows
 from jaxrender.pipelines.base import BLENDING_DEFAULTS
 from jaxrender.pipelines.quads import segment_starts
 from jaxrender.pipelines.visibility import (clip_vertices, faces_where, is_transparent, points_at,
@@ -92,9 +93,10 @@ def refuse_transparency(scene, pipeline: str) -> None:
 def layer_shader(scene, camera):
     """points -> float32[N, 5]: the shared ``shade()`` radiance, the opacity, the view depth."""
     def fn(points):
-        rgb = shade(points, scene)
-        a = opacity(points, scene)
-        z = view_depth(points, camera)
+        # Stored apart before they are joined: a fusion that writes all five channels runs
+        # a thread per channel, each evaluating the lights; ``shade``'s three share one.
+        rgb, a, z = whole_rows((shade(points, scene), opacity(points, scene),
+                                view_depth(points, camera)))
         return jnp.concatenate([rgb, a[:, None], z[:, None]], axis=-1)
 
     return fn
@@ -224,7 +226,9 @@ def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Ar
                 lanes = work.lanes
             else:
                 points = points_of(jnp.arange(pixel.shape[0], dtype=jnp.int32))
-                values = shader(dataclasses.replace(points, valid=points.valid & front))
+                # Stored whole: the composite's sort gathers the values in another order.
+                values = whole_rows(shader(dataclasses.replace(points,
+                                                               valid=points.valid & front)))
                 lanes = jnp.int32(pixel.shape[0])
         with jax.named_scope("composite"):
             image, counts = composite_list(scene, Layers(pixel, tri, depth, front, values), bg,
