@@ -159,3 +159,82 @@ def test_pair_barycentrics_reduce_over_no_short_axis():
     closed = jax.make_jaxpr(lambda c: pair_barycentrics(c, faces, tri, px, py, 16, 16))(clip)
     found = _short_reductions(closed.jaxpr, [])
     assert not found, f"pair_barycentrics reduces over short axes: {found}"
+
+
+def _scatter_sources(jaxpr, producers, found):
+    """(scatter primitive, the primitive that made its updates) for every scatter, through
+    nested jaxprs (loops, branches, calls: their inner variables are their own)."""
+    made = dict(producers)
+    for eqn in jaxpr.eqns:
+        if eqn.primitive.name.startswith("scatter"):
+            updates = eqn.invars[2]
+            found.append((eqn.primitive.name, made.get(updates, "input")))
+        for v in eqn.outvars:
+            made[v] = eqn.primitive.name
+        for sub in _sub_jaxprs(eqn.params):
+            _scatter_sources(sub, {}, found)
+    return found
+
+
+def _points_of(n: int):
+    def points_of(items):
+        pts = _room_points(n, 4)
+        return jax.tree.map(lambda a: a[items % n], pts)
+    return points_of
+
+
+@pytest.mark.parametrize("mode", ["blocks", "switch"])
+def test_the_dispatch_scatters_shader_results_computed_whole(monkeypatch, mode):
+    """A scatter evaluates a fused operand once per element it writes, so the shader's lights
+    ran once per colour channel inside the dispatch's scatter (the offline H100 program,
+    RESULTS.md, thirty-sixth session): its values must reach the scatter through
+    ``whole_rows``'s barrier, as a tensor computed on its own."""
+    import jaxrender.pipelines.dispatch as dispatch
+
+    monkeypatch.setenv(dispatch.ENV_LAUNCH, mode)
+    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
+    n = 64
+    work = dispatch.WorkList.of(jnp.arange(n) % 3 != 0)
+    closed = jax.make_jaxpr(lambda w: dispatch.shade(
+        w, _points_of(n), lambda p: shade(p, scene), jnp.zeros((n, 3)), 16))(work)
+    sources = [s for _, s in _scatter_sources(closed.jaxpr, {}, [])]
+    assert "optimization_barrier" in sources, f"no scatter reads barrier output: {sources}"
+    assert all(s != "concatenate" for s in sources), (
+        f"a scatter reads the shader's stacked channels directly: {sources}")
+
+
+def test_the_dense_launch_scatters_shader_results_computed_whole():
+    import jaxrender.pipelines.dispatch as dispatch
+
+    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
+    n = 64
+    active = jnp.arange(n) % 5 == 0  # fits the half-size tier: compacted and scattered back
+    closed = jax.make_jaxpr(lambda a: dispatch.shade_dense(
+        a, _points_of(n), lambda p: shade(p, scene), jnp.zeros((n, 3))))(active)
+    found = _scatter_sources(closed.jaxpr, {}, [])
+    unique = [s for name, s in found if name == "scatter"]
+    assert "optimization_barrier" in unique, f"the compacted tier scatters {found}"
+
+
+def test_the_layer_shader_joins_channels_computed_apart():
+    """Its five channels in one fusion ran the lights once per channel (a loop fusion writes
+    an element a thread); the colour, opacity and depth are computed apart and then joined."""
+    from jaxrender.pipelines.transparency import layer_shader
+
+    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
+    closed = jax.make_jaxpr(layer_shader(scene, scene.camera))(_room_points(16, 2))
+    made = {}
+    for eqn in closed.jaxpr.eqns:
+        for v in eqn.outvars:
+            made[v] = eqn
+    last = made[closed.jaxpr.outvars[0]]
+    assert last.primitive.name == "concatenate", last.primitive.name
+
+    def origin(v):  # through the reshapes and broadcasts that add the channel axis
+        eqn = made.get(v)
+        while eqn is not None and eqn.primitive.name in ("broadcast_in_dim", "reshape"):
+            eqn = made.get(eqn.invars[0])
+        return eqn.primitive.name if eqn is not None else "input"
+
+    assert [origin(v) for v in last.invars] == ["optimization_barrier"] * 3, (
+        [origin(v) for v in last.invars])
