@@ -18,15 +18,15 @@
 # Call 1 ran `fwdprof fwdmodes last35` on an H100 (RESULTS.md, thirty-sixth session). Call 2
 #   (carry [".whl", ".v/base36"]; .v/base36 from `git archive 8c6a21f jaxrender`):
 #   bash benchmarks/gpu_thirty_sixth.sh rowsprof rows36
-# rowsprof: this tree's forward on glass and room and deferred on glass, kernels by scope, for
+# rowsprof: this tree's forward and deferred on glass, kernels by scope, beside
 #   call 1's profiles of 8c6a21f's forward: shader results computed whole (fusion.whole_rows)
 #   before the dispatch's scatter and the composite's gather, which had fused the shader and
 #   ran it once per channel (the offline H100 program: the lights inside the scatter, 372 of
 #   its 535 instructions), and materialize a barrier on a GPU. Predicted: forward's shade
 #   scope 1.48 -> 0.7-0.9 ms on glass, 1.19 -> 0.7-0.8 on room; deferred's composite on glass
 #   0.41 -> 0.25-0.3 (its 0.205 ms gather held the layer shader).
-# rows36: base36 against this tree, A B B A: deferred, forward, the visibility buffer and
-#   checkerboard on glass and room.
+# rows36: base36 against this tree, A B B A: deferred, forward and the visibility buffer
+#   on glass and room (checkerboard left out: the device time left).
 # On an H200, `targets` (issue 23's rows) runs first (gpu_env.sh's targets_first).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
@@ -42,7 +42,7 @@ for part in $(targets_first "$*"); do
         | tee -a "$OUT/fwdmodes.md"
     done
   elif [ "$part" = rowsprof ]; then
-    for case in "forward glass" "forward room" "deferred glass"; do
+    for case in "forward glass" "deferred glass"; do
       set -- $case
       PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py "$1" \
         --scene "$2" --top 20 --calls 3 --scope-top 5 $(printf -- '--scope %s ' fragments \
@@ -54,7 +54,7 @@ for part in $(targets_first "$*"); do
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side rows36 150 "base36 after" --scenes glass room --pipelines deferred forward \
-      visbuffer checkerboard
+      visbuffer
   elif [ "$part" = fwdprof ]; then
     for scene in glass room; do
       PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/profile_kernels.py forward \
