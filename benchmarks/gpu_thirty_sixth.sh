@@ -27,6 +27,8 @@
 #   0.41 -> 0.25-0.3 (its 0.205 ms gather held the layer shader).
 # rows36: base36 against this tree, A B B A: deferred, forward and the visibility buffer
 #   on glass and room (checkerboard left out: the device time left).
+# rowsmin: what fits ~300 s of device time: rows36 for forward on glass and room and deferred
+#   on glass (A B B A), then forward's profile on glass alone.
 # On an H200, `targets` (issue 23's rows) runs first (gpu_env.sh's targets_first).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
@@ -55,6 +57,13 @@ for part in $(targets_first "$*"); do
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side rows36 150 "base36 after" --scenes glass room --pipelines deferred forward \
       visbuffer
+  elif [ "$part" = rowsmin ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side rowsmin 100 "base36 after" --scenes glass room --pipelines forward
+    side_by_side rowsmin_def 60 "base36 after" --scenes glass --pipelines deferred
+    prof forward glass 90 fragments depth_test shade lighting
   elif [ "$part" = fwdprof ]; then
     for scene in glass room; do
       PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/profile_kernels.py forward \
