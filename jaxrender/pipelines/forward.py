@@ -133,11 +133,14 @@ def single_sample_draw_list(fr, width: int, height: int, n_tris: int) -> DrawLis
     live = jnp.minimum(fr.count, fr.pixel.shape[0])
     quad, lane = quad_keys(jnp.where(fr.valid, fr.pixel, 0), width)
     n_quads = qw * ((height + 1) // 2)
-    keys = [jnp.where(fr.valid, k, -1) for k in (quad, fr.tri, lane)]
-    (quad, tri, lane), (depth,) = lex_sort_prefix(keys, (n_quads - 1, n_tris - 1, 3),
-                                                  (fr.depth,), live)
+    # (triangle, lane) as one key: one out-of-range code where two took a bit each, so that
+    # room's key fits 32 bits (a 32-bit pairs sort, half the radix passes of a 64-bit one).
+    keys = [jnp.where(fr.valid, k, -1) for k in (quad, fr.tri * 4 + lane)]
+    (quad, tri_lane), (depth,) = lex_sort_prefix(keys, (n_quads - 1, 4 * n_tris - 1),
+                                                 (fr.depth,), live)
     valid = quad != EMPTY
-    quad, lane = jnp.where(valid, quad, 0), jnp.where(valid, lane, 0)
+    tri = jnp.where(valid, tri_lane // 4, EMPTY)
+    quad, lane = jnp.where(valid, quad, 0), jnp.where(valid, tri_lane % 4, 0)
     pixel = (2 * (quad // qw) + lane // 2) * width + 2 * (quad % qw) + lane % 2
     skey = jnp.where(valid, 0, 1)
     seg = segment_starts(skey, quad)

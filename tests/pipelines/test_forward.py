@@ -6,6 +6,7 @@ import pytest
 from fdv_scenes import FOLIAGE_CARDS, H, W, foliage_scene, make_scene, rect_part, tri_part
 
 from jaxrender.pipelines import COUNT_KEYS, get_pipeline, make_config, program
+from jaxrender.sorting import EMPTY
 
 FORWARD = get_pipeline("forward")
 NEAR = rect_part(0, 0, 4, 4, 2.0)  # 16 pixels
@@ -119,12 +120,41 @@ def test_the_single_sample_draw_list_is_quad_major_and_in_draw_order(filled):
     order = np.lexsort((lane, tri[:n], quad))
     np.testing.assert_array_equal(np.asarray(got.pixel)[:n], pixel[order], err_msg="pixel")
     np.testing.assert_array_equal(np.asarray(got.tri)[:n], tri[order], err_msg="tri")
+    np.testing.assert_array_equal(np.asarray(got.tri)[n:], EMPTY, err_msg="tri of the tail")
     np.testing.assert_array_equal(np.asarray(got.depth)[:n], depth[order], err_msg="depth")
     np.testing.assert_array_equal(np.asarray(got.lane)[:n], lane[order], err_msg="lane")
     np.testing.assert_array_equal(np.asarray(got.valid), valid, err_msg="valid")
     np.testing.assert_array_equal(np.asarray(got.slot), np.where(valid, got.pixel, w * h))
     starts = np.concatenate([[True], quad[order][1:] != quad[order][:-1]])
     np.testing.assert_array_equal(np.asarray(got.seg)[:n], starts, err_msg="seg")
+
+
+def _sort_key_dtypes(jaxpr, found):
+    for eqn in jaxpr.eqns:
+        if eqn.primitive.name == "sort":
+            found.add(str(eqn.invars[0].aval.dtype))
+        for value in eqn.params.values():
+            for v in value if isinstance(value, (tuple, list)) else (value,):
+                inner = getattr(v, "jaxpr", v)
+                if hasattr(inner, "eqns"):
+                    _sort_key_dtypes(inner, found)
+    return found
+
+
+def test_a_room_sized_quad_list_sorts_a_32_bit_key_on_a_gpu():
+    # (quad, triangle, lane) at 1920x1080 with room's 1056 triangles: 19 + 13 bits with the
+    # triangle and lane in one key (one out-of-range code), 33 as three keys; the GPU branch of
+    # lex_sort then sorts uint32 keys beside the index instead of uint64 ones.
+    from jaxrender.pipelines.forward import single_sample_draw_list
+    from jaxrender.raster.fragments import Fragments
+
+    cap = 1 << 16
+    fr = Fragments(jax.ShapeDtypeStruct((cap,), np.int32), jax.ShapeDtypeStruct((cap,), np.int32),
+                   jax.ShapeDtypeStruct((cap,), np.float32), jax.ShapeDtypeStruct((cap,), bool),
+                   jax.ShapeDtypeStruct((), np.int32))
+    closed = jax.make_jaxpr(lambda f: single_sample_draw_list(f, 1920, 1080, 1056))(fr)
+    dtypes = _sort_key_dtypes(closed.jaxpr, set())
+    assert "uint32" in dtypes and "uint64" not in dtypes, f"sort key dtypes {sorted(dtypes)}"
 
 
 def test_the_per_pixel_minimum_of_a_quad_major_list():
