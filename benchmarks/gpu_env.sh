@@ -1,7 +1,8 @@
 # Sourced by the device-call scripts: the checkout's root as the working folder, the carried
 # wheels (.whl/: trimesh, colour-science, xatlas) installed into /tmp/site, unbuffered output,
 # no GPU preallocation, quiet() to drop XLA's log lines, trees() and side_by_side() to run the
-# sequence bench in several trees side by side, prof() for a program's kernels by scope,
+# sequence bench in several trees side by side (each run's whole output kept in a log), a tree
+# not carried refused by tree_root(), prof() for a program's kernels by scope,
 # layer_bench() for the shader-cost layers bench, time_work() for the time-work fits,
 # bundle_out() to pack $OUT into one file, and targets_first() to run issue 23's rows first on
 # an H200.
@@ -15,13 +16,22 @@ export PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 quiet() { grep -v "^WARNING\|^I0000\|^E0000\|^W0000"; }
 # --outputs all: the older trees know no other, and a comparison times like with like.
 B="python3 benchmarks/bench_sequence.py --no-single --checksum --resolution 1920x1080 --outputs all"
+# tree_root TREE: the folder whose jaxrender a tree's run imports (after: this checkout, else
+# .v/TREE); a tree not carried fails loudly: the bench scripts put this checkout on the path
+# when PYTHONPATH names no jaxrender, so it would run this checkout under the tree's name.
+tree_root() {
+  if [ "$1" = after ]; then echo "$PWD"; return; fi
+  [ -d "$PWD/.v/$1/jaxrender" ] || { echo "tree $1: no .v/$1/jaxrender (carry it)" >&2; return 1; }
+  echo "$PWD/.v/$1"
+}
 # trees FILE SECONDS "TREE ..." BENCH-ARGS...: the bench in each tree (after: this checkout,
 # else .v/TREE), its rows tagged with the tree and appended to $OUT/FILE.
 trees() {
   local file=$1 limit=$2 names=$3 t R
   shift 3
   for t in $names; do
-    if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+    R=$(tree_root "$t") || { echo "{\"tree\": \"$t\", \"error\": \"not carried\"}" \
+      | tee -a "$OUT/$file"; continue; }
     PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $B "$@" 2>&1 | quiet | grep '^{' \
       | sed "s/^{/{\"tree\": \"$t\", /" | tee -a "$OUT/$file"
   done
@@ -37,10 +47,11 @@ side_by_side() {
   order=$names
   for pass in $(seq 1 "${ORDERS:-2}"); do
     for t in $order; do
-      if [ "$t" = after ]; then R=$PWD; else R=$PWD/.v/$t; fi
+      R=$(tree_root "$t") || { echo "$t ($pass): skipped" | tee -a "$OUT/$name.md"; continue; }
+      # The whole output in a log beside the table: a run that prints no row says why there.
       PYTHONPATH=$R:/tmp/site timeout -k 5 "$limit" $S "$@" \
-        --json "$OUT/${name}_${t}_$pass.json" 2>&1 | quiet | grep '^|' \
-        | sed "s/^/$t ($pass): /" | tee -a "$OUT/$name.md"
+        --json "$OUT/${name}_${t}_$pass.json" 2>&1 | quiet | tee "$OUT/${name}_${t}_$pass.log" \
+        | grep '^|' | sed "s/^/$t ($pass): /" | tee -a "$OUT/$name.md"
     done
     order=$(printf '%s\n' $order | tac | tr '\n' ' ')
   done
