@@ -29,6 +29,16 @@
 #   on glass and room (checkerboard left out: the device time left).
 # rowsmin: what fits ~300 s of device time: rows36 for forward on glass and room and deferred
 #   on glass (A B B A), then forward's profile on glass alone.
+# textaps: the texture filter's addresses and weights computed whole before its texels are
+#   read (benchmarks/variants/texture_taps_whole.patch, prepared without device time), A B B A
+#   against this tree: deferred and forward on glass and room. Prepare the tree here:
+#   mkdir -p .v/textaps && git archive HEAD jaxrender | tar -x -C .v/textaps &&
+#   patch -d .v/textaps -p1 < benchmarks/variants/texture_taps_whole.patch  (carry .v/textaps)
+#   The offline H100 program (jax 0.10.2) of forward on glass: texture instructions a point
+#   776 -> 459 (the addresses once a point, not once a channel and again for the opacity); the
+#   texels are still read a channel at a time, and 11 values a point are stored and read back.
+#   Predicted: within +-0.1 ms a frame either way (integer arithmetic saved against ~44 bytes
+#   a point more traffic); adopt only if faster on both scenes in both passes.
 # On an H200, `targets` (issue 23's rows) runs first (gpu_env.sh's targets_first).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
@@ -64,6 +74,11 @@ for part in $(targets_first "$*"); do
     side_by_side rowsmin 100 "base36 after" --scenes glass room --pipelines forward
     side_by_side rowsmin_def 60 "base36 after" --scenes glass --pipelines deferred
     prof forward glass 90 fragments depth_test shade lighting
+  elif [ "$part" = textaps ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side textaps 150 "after textaps" --scenes glass room --pipelines deferred forward
   elif [ "$part" = fwdprof ]; then
     for scene in glass room; do
       PYTHONPATH=$PWD:/tmp/site timeout -k 5 150 python3 benchmarks/profile_kernels.py forward \
