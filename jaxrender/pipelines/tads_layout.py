@@ -64,7 +64,6 @@ def check_charts(scene, sheet: ShadeSheet) -> None:
     obj = np.asarray(scene.tri_object)
     world = tri_area2(pos)
     chart = tri_area2(corner)
-    scale = max(float(world.max(initial=0.0)), 1e-30)
     res = np.asarray(sheet.obj_res)
     for o in range(int(obj.max(initial=-1)) + 1):
         if res[o] == 0:
@@ -76,7 +75,10 @@ def check_charts(scene, sheet: ShadeSheet) -> None:
             why = "non-finite chart coordinates"
         elif c.size and (c.min() < 0.0 or c.max() > 1.0):
             why = "chart coordinates outside [0, 1]^2"
-        elif np.any((chart[sel] <= 1e-12) & (world[sel] > 1e-9 * scale)):
+        # "Non-zero" against the object's own largest triangle: against the scene's, a small
+        # object beside a large one had every triangle under the bar.
+        elif np.any((chart[sel] <= 1e-12)
+                    & (world[sel] > 1e-9 * max(float(world[sel].max(initial=0.0)), 1e-30))):
             why = "a triangle of non-zero area has no chart area"
         if why:
             raise ValueError(f"tads: {object_label(scene, o, int(sel.sum()))} has no usable "

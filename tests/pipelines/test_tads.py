@@ -23,8 +23,12 @@ from jaxrender.pipelines.tads_layout import (SUBTEXEL_BITS, check_charts, object
                                              pack_virtual)
 from jaxrender.pipelines.tads_samples import decode, footprint_texels, geometry_pass
 from jaxrender.pipelines.visibility import visibility
+from jaxrender.scene.lights import make_lights
+from jaxrender.scene.materials import Material
+from jaxrender.scene.scene import build_scene
 from tests.pipelines.test_object_space import (D, H, W, _camera, _deferred, _random_mesh,
                                                plane_scene, stripes_scene)
+from tests.pipelines.transparent_scenes import layered_quads, quad
 
 _EXACT = 1e-5  # float32 rounding of barycentrics and colours
 
@@ -299,6 +303,21 @@ def test_unsupported_inputs_are_refused_naming_the_object():
         check_charts(scene, bad)
     flat = dataclasses.replace(sheet, corner_st=sheet.corner_st.at[5].set(0.5))
     with pytest.raises(ValueError, match="no chart area"):
+        check_charts(scene, flat)
+
+
+def test_a_tiny_object_is_checked_at_its_own_scale():
+    # A 1e-5 quad beside an 8 x 8 one: its triangles' areas are ~1e-12 of the large quad's,
+    # under the 1e-9 that a scene-wide scale lets through, so its flat chart is caught only
+    # when each object is measured against its own largest triangle.
+    scene = build_scene([quad(-2.0, 0, size=(8.0, 8.0)), quad(0.0, 0, size=(1e-5, 1e-5))],
+                        [Material("grey", albedo=(0.5, 0.5, 0.5))], [],
+                        make_lights([], ambient=1.0), layered_quads([]).camera, name="tiny")
+    sheet = tads.prepare(scene, tads.TadsConfig(sheet_resolution=16)).sheet
+    assert int(sheet.obj_res[1]) > 0, "the tiny quad has a sheet to check"
+    tiny = np.flatnonzero(np.asarray(scene.tri_object) == 1)
+    flat = dataclasses.replace(sheet, corner_st=sheet.corner_st.at[tiny].set(0.5))
+    with pytest.raises(ValueError, match="object 1 of scene 'tiny' .*no chart area"):
         check_charts(scene, flat)
 
 

@@ -116,8 +116,8 @@ def _with_material(part: MeshPart, per_face) -> MeshPart:
 def _sliver_scene(blend: str):
     """The built-in sliver scene's fan (its needle and zero-area triangles), blended or not, in
     front of a small opaque quad. Its chart fails check_charts on one needle whose chart area
-    rounds to 0 in float32 while its world area (3e-8) is above 1e-9 of the scene's largest
-    triangle; the quad is kept smaller than the fan's largest triangle so that stays so."""
+    rounds to 0 in float32 while its world area (3e-8) is above 1e-9 of the fan's largest
+    triangle."""
     s = builtin.sliver()
     fan = MeshPart(np.asarray(s.positions, np.float64), np.asarray(s.faces),
                    np.asarray(s.normals), np.asarray(s.uvs), material=1)
