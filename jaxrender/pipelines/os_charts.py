@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxrender.pipelines.os_texels import raster_st, tri_area2
+from jaxrender.pipelines.os_texels import flattened, raster_st, tri_area2
 
 OVERLAP_GRID = 256  # texels per side of the uniqueness test
 XATLAS_PADDING = 2  # texels between charts at level 0
@@ -49,8 +49,7 @@ def _fit_unit(uv: np.ndarray, margin: float) -> tuple[np.ndarray, float]:
 def own_uvs_unique(corner_st: np.ndarray, world_area2: np.ndarray) -> bool:
     """True when no uv triangle is degenerate (unless its world area is) and none overlap."""
     uv_area2 = tri_area2(corner_st)
-    scale = max(float(np.max(world_area2, initial=0.0)), 1e-30)
-    if np.any((uv_area2 <= 1e-12) & (world_area2 > 1e-9 * scale)):
+    if np.any(flattened(uv_area2, world_area2)):
         return False
     if 0.5 * uv_area2.sum() > 1.0 + 1e-6:  # more uv area than the unit square: overlap for sure
         return False

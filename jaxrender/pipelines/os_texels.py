@@ -16,6 +16,14 @@ def tri_area2(p: np.ndarray) -> np.ndarray:
     return np.linalg.norm(np.cross(e1, e2), axis=-1)
 
 
+def flattened(chart_area2: np.ndarray, world_area2: np.ndarray) -> np.ndarray:
+    """bool[T]: the triangles of one object that have world area but no chart area. "World
+    area" is measured against the object's largest triangle: against a scene's, a small object
+    beside a large one had every triangle under the bar."""
+    tiny = 1e-9 * max(float(np.max(world_area2, initial=0.0)), 1e-30)
+    return (chart_area2 <= 1e-12) & (world_area2 > tiny)
+
+
 SUBPIXEL = 256  # 8-bit sub-texel snapping, as the shared rasterizer
 
 

@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.pipelines.os_sheet import CHUNK, ShadeSheet, build_sheet
-from jaxrender.pipelines.os_texels import tri_area2
+from jaxrender.pipelines.os_texels import flattened, tri_area2
 from jaxrender.types import Array, pytree_dataclass, static_field
 
 VIRTUAL_BITS = 14
@@ -75,10 +75,7 @@ def check_charts(scene, sheet: ShadeSheet) -> None:
             why = "non-finite chart coordinates"
         elif c.size and (c.min() < 0.0 or c.max() > 1.0):
             why = "chart coordinates outside [0, 1]^2"
-        # "Non-zero" against the object's own largest triangle: against the scene's, a small
-        # object beside a large one had every triangle under the bar.
-        elif np.any((chart[sel] <= 1e-12)
-                    & (world[sel] > 1e-9 * max(float(world[sel].max(initial=0.0)), 1e-30))):
+        elif np.any(flattened(chart[sel], world[sel])):
             why = "a triangle of non-zero area has no chart area"
         if why:
             raise ValueError(f"tads: {object_label(scene, o, int(sel.sum()))} has no usable "
