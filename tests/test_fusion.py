@@ -15,6 +15,7 @@ from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.shading import load_lit_scene, shade
 from jaxrender.shading.vec import safe_normalize
 from jaxrender.types import SurfacePoints
+from tests.jaxpr_walk import sub_jaxprs
 
 SHORT = 4  # the longest axis the shader may reduce as adds; a reduce over one is a regression
 SHADOW_MAP = 32
@@ -81,17 +82,9 @@ def _short_reductions(jaxpr, found):
             axes = eqn.params["axes"]
             if any(shape[a] <= SHORT for a in axes):
                 found.append((eqn.primitive.name, shape, axes))
-        for sub in _sub_jaxprs(eqn.params):
+        for sub in sub_jaxprs(eqn.params):
             _short_reductions(sub, found)
     return found
-
-
-def _sub_jaxprs(params):
-    for value in params.values():
-        for v in value if isinstance(value, (tuple, list)) else (value,):
-            inner = getattr(v, "jaxpr", v)
-            if hasattr(inner, "eqns"):
-                yield inner
 
 
 def _room_points(n: int, seed: int) -> SurfacePoints:
@@ -132,7 +125,7 @@ def _wide_arithmetic(jaxpr, scope: str, skip: str, found):
                 and eqn.primitive.name not in NOT_ARITHMETIC
                 and any(len(v.aval.shape) > 1 for v in eqn.outvars)):
             found.append((stack, eqn.primitive.name, [v.aval.shape for v in eqn.outvars]))
-        for sub in _sub_jaxprs(eqn.params):
+        for sub in sub_jaxprs(eqn.params):
             _wide_arithmetic(sub, scope, skip, found)
     return found
 
@@ -171,7 +164,7 @@ def _scatter_sources(jaxpr, producers, found):
             found.append((eqn.primitive.name, made.get(updates, "input")))
         for v in eqn.outvars:
             made[v] = eqn.primitive.name
-        for sub in _sub_jaxprs(eqn.params):
+        for sub in sub_jaxprs(eqn.params):
             _scatter_sources(sub, {}, found)
     return found
 

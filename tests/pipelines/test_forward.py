@@ -7,6 +7,7 @@ from fdv_scenes import FOLIAGE_CARDS, H, W, foliage_scene, make_scene, rect_part
 
 from jaxrender.pipelines import COUNT_KEYS, get_pipeline, make_config, program
 from jaxrender.sorting import EMPTY
+from tests.jaxpr_walk import all_equations
 
 FORWARD = get_pipeline("forward")
 NEAR = rect_part(0, 0, 4, 4, 2.0)  # 16 pixels
@@ -129,18 +130,6 @@ def test_the_single_sample_draw_list_is_quad_major_and_in_draw_order(filled):
     np.testing.assert_array_equal(np.asarray(got.seg)[:n], starts, err_msg="seg")
 
 
-def _sort_key_dtypes(jaxpr, found):
-    for eqn in jaxpr.eqns:
-        if eqn.primitive.name == "sort":
-            found.add(str(eqn.invars[0].aval.dtype))
-        for value in eqn.params.values():
-            for v in value if isinstance(value, (tuple, list)) else (value,):
-                inner = getattr(v, "jaxpr", v)
-                if hasattr(inner, "eqns"):
-                    _sort_key_dtypes(inner, found)
-    return found
-
-
 def test_a_room_sized_quad_list_sorts_a_32_bit_key_on_a_gpu():
     # (quad, triangle, lane) at 1920x1080 with room's 1056 triangles: 19 + 13 bits with the
     # triangle and lane in one key (one out-of-range code), 33 as three keys; the GPU branch of
@@ -153,7 +142,8 @@ def test_a_room_sized_quad_list_sorts_a_32_bit_key_on_a_gpu():
                    jax.ShapeDtypeStruct((cap,), np.float32), jax.ShapeDtypeStruct((cap,), bool),
                    jax.ShapeDtypeStruct((), np.int32))
     closed = jax.make_jaxpr(lambda f: single_sample_draw_list(f, 1920, 1080, 1056))(fr)
-    dtypes = _sort_key_dtypes(closed.jaxpr, set())
+    dtypes = {str(eqn.invars[0].aval.dtype) for eqn in all_equations(closed.jaxpr)
+              if eqn.primitive.name == "sort"}
     assert "uint32" in dtypes and "uint64" not in dtypes, f"sort key dtypes {sorted(dtypes)}"
 
 
