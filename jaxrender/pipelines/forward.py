@@ -34,7 +34,6 @@ from jaxrender.pipelines.quads import (BIG, exclusive_lane_cummin, exclusive_seg
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
 from jaxrender.pipelines.forward_transparency import forward_blend, forward_front, forward_split
-from jaxrender.pipelines.transparency import LAYER_CHANNELS, layer_shader
 from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
                                             points_at_xy, raster_fragments)
 from jaxrender.pipelines.waves import check_wave_size
@@ -214,7 +213,8 @@ def alpha_pass(scene, draw: DrawList, unit_points, cfg) -> tuple[Array, Array]:
 
 def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
     """The plan: (units to shade bool[F], the fragment each (sample, pixel) shows int32[S * P],
-    -1 for none). GL_LESS in draw order, or GL_EQUAL against the pre-pass depth."""
+    -1 for none, the final depth float32[S * P], +inf where none). GL_LESS in draw order, or
+    GL_EQUAL against the pre-pass depth."""
     n_slots = n_s * cfg.width * cfg.height
     zk = jnp.where(keep, draw.depth, INF)
     zbuf = jnp.full((n_slots,), INF).at[draw.slot].min(zk, mode="drop")
@@ -227,16 +227,18 @@ def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
     order = jnp.arange(draw.tri.shape[0], dtype=jnp.int32)
     win = jnp.full((n_slots,), -1, jnp.int32).at[draw.slot].max(
         jnp.where(writer, order, -1), mode="drop")
-    return _any_per_unit(draw, shaded), win
+    return _any_per_unit(draw, shaded), win, zbuf
 
 
 def replay(draw: DrawList, opaque_valid: Array, transparent, keep: Array, n_s: int, cfg):
     """The draw replayed over the list's filled prefix only (``on_prefix``): the depth test,
     the transparent fragments in front (None without), the first unit of each (triangle,
-    quad) when the sort already grouped them and each pixel's shade count; then the shading
-    work list, compacted outside the branch (inside it was slower on foliage; RESULTS.md).
-    Returns (shade_unit bool[F], win int32[S * P], blended bool[F] or None,
-    first bool[F] or None, WorkList, per-pixel shades int32[P])."""
+    quad) when the sort already grouped them and each pixel's shade count (both over the
+    opaque and the transparent units); then the work lists of the opaque units and of the
+    transparent ones, compacted outside the branch (inside it was slower on foliage;
+    RESULTS.md). Returns (opaque units bool[F], win int32[S * P], blended bool[F] or None,
+    first bool[F] or None, opaque WorkList, transparent WorkList or None, per-pixel shades
+    int32[P])."""
     n_pix = cfg.width * cfg.height
     marks_quads = draw.lane is not None and not cfg.shade_helpers
     rows = {"draw": live_rows(draw), "opaque": opaque_valid, "keep": keep}
@@ -245,20 +247,21 @@ def replay(draw: DrawList, opaque_valid: Array, transparent, keep: Array, n_s: i
 
     def run(rows, _):
         d = draw._replace(**rows["draw"])
-        shade_unit, win = depth_test(d._replace(valid=rows["opaque"]), rows["keep"], n_s, cfg)
-        blended = forward_front(d, rows.get("transparent"), rows["keep"], cfg)
-        if blended is not None:  # shaded in the main pass, blended after it
-            shade_unit = shade_unit | blended
+        shade_unit, win, z_final = depth_test(d._replace(valid=rows["opaque"]), rows["keep"],
+                                              n_s, cfg)
+        blended = forward_front(d, rows.get("transparent"), z_final)
+        units = shade_unit if blended is None else shade_unit | blended
         out = {"shade": shade_unit, "blended": blended}
         if marks_quads:
-            out["first"] = first_units_of_quads(d.tri, d.seg, shade_unit)
+            out["first"] = first_units_of_quads(d.tri, d.seg, units)
         per_pixel = jnp.zeros((n_pix,), jnp.int32).at[
-            jnp.where(shade_unit, d.pixel, n_pix)].add(1, mode="drop")
+            jnp.where(units, d.pixel, n_pix)].add(1, mode="drop")
         return {k: v for k, v in out.items() if v is not None}, (win, per_pixel)
 
     out, (win, per_pixel) = on_prefix(run, live_count(draw), rows)
-    return (out["shade"], win, out.get("blended"), out.get("first"),
-            dispatch.WorkList.of(out["shade"]), per_pixel)
+    blended = out.get("blended")
+    return (out["shade"], win, blended, out.get("first"), dispatch.WorkList.of(out["shade"]),
+            None if blended is None else dispatch.WorkList.of(blended), per_pixel)
 
 
 @register_frame("forward", ForwardConfig)
@@ -277,7 +280,7 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
     with jax.named_scope("alpha_test"):
         keep, alpha_invocations = alpha_pass(scene, opaque, unit_points, cfg)
     with jax.named_scope("depth_test"):
-        shade_unit, win, blended, first, work, per_pixel = replay(
+        shade_unit, win, blended, first, work, blended_work, per_pixel = replay(
             draw, opaque.valid, transparent, keep, n_s, cfg)
     with jax.named_scope("quads"):
         if first is None:  # the helper lanes need the quads listed
@@ -293,28 +296,19 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
                 ql["n_quads"] * 4, _helper_lane_fn(scene, camera, clip, cfg, ql), colours,
                 cfg.chunk, 4 * colours.shape[0])  # a quad holds one fragment at least
         else:
-            colours, work = forward_shade(scene, camera, work, unit_points, blended, cfg)
+            colours, work = dispatch.shade(work, unit_points, lambda p: shade(p, scene),
+                                           colours, cfg.chunk)
     with jax.named_scope("resolve"):
-        image, covered = resolve_samples(colours[:, :3], draw, win, n_s, cfg)
+        image, covered = resolve_samples(colours, draw, win, n_s, cfg)
     with jax.named_scope("counts"):
-        counts = _counts(scene, draw, quads, work.invocations, covered, alpha_invocations, cfg)
+        invocations = work.invocations + (0 if blended_work is None else blended_work.count)
+        counts = _counts(scene, draw, quads, invocations, covered, alpha_invocations, cfg)
         # The pre-pass transforms every vertex again (positions only).
         counts.update(vertex_counts(scene, full_passes=1, position_passes=int(cfg.z_prepass)))
-    image, counts = forward_blend(scene, draw, blended, colours, image, counts, cfg)
+    image, counts = forward_blend(scene, camera, clip, draw, blended, blended_work, unit_points,
+                                  image, counts, cfg)
     image = poison_on_overflow(image, counts["overflow"])
     return Frame(image, counts, {"shade_count": per_pixel.reshape(cfg.height, cfg.width)})
-
-
-def forward_shade(scene, camera, work, unit_points, blended, cfg):
-    """The main pass's one dispatch of the work list of units to shade: with transparency,
-    its transparent units return the transparent pass's layer values (colour, opacity, view
-    depth) too."""
-    if blended is None:
-        shader, channels = (lambda p: shade(p, scene)), 3
-    else:
-        shader, channels = layer_shader(scene, camera), LAYER_CHANNELS
-    colours = jnp.zeros((work.items.shape[0], channels), jnp.float32)
-    return dispatch.shade(work, unit_points, shader, colours, cfg.chunk)
 
 
 def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):

@@ -1,13 +1,16 @@
 """Forward's transparent fragments: split from its draw list, tested against its final opaque
-depth, shaded in its main pass, and blended here by the shared ``transparency.composite``."""
+depth, and shaded and blended after its opaque units, as engines draw the transparent
+geometry after the opaque (``transparency.blend_listed``, or the chunked dispatch and
+``transparency.composite`` when chunks are asked for)."""
 
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
 
-from jaxrender.pipelines.transparency import (Layers, check_settings, composite,
-                                              refuse_transparency, settings_of)
+from jaxrender.pipelines.dispatch import launches_once
+from jaxrender.pipelines.transparency import (Layers, blend_listed, check_settings, composite,
+                                              layer_values, refuse_transparency, settings_of)
 from jaxrender.pipelines.visibility import is_transparent
 
 
@@ -23,29 +26,43 @@ def forward_split(scene, draw, cfg):
     return draw._replace(valid=draw.valid & ~transparent), transparent
 
 
-def forward_front(draw, transparent, keep, cfg):
-    """bool[F]: the transparent fragments in front of the final opaque depth of their pixel
-    (drawn after the opaque ones, as engines order them), or None."""
+def forward_front(draw, transparent, z_final):
+    """bool[F]: the transparent fragments in front of the final opaque depth of their slot
+    (``z_final`` float32[S * P], +inf where none: drawn after the opaque ones, as engines
+    order them), or None."""
     if transparent is None:
         return None
-    n_pix = cfg.width * cfg.height
-    z = jnp.full((n_pix,), jnp.inf).at[draw.slot].min(jnp.where(keep, draw.depth, jnp.inf),
-                                                       mode="drop")
-    return transparent & (draw.depth < z.at[draw.slot].get(mode="fill", fill_value=-jnp.inf))
+    return transparent & (draw.depth < z_final.at[draw.slot].get(mode="fill",
+                                                                 fill_value=-jnp.inf))
 
 
-def forward_blend(scene, draw, front, values, image, counts: dict, cfg):
-    """Blend forward's shaded transparent units (``values`` from its main pass) over its opaque
-    image; their shading is already in ``shade_invocations``. Returns (image, counts)."""
+def forward_blend(scene, camera, clip, draw, front, work, unit_points, image, counts: dict, cfg):
+    """Shade forward's transparent units in front (``front`` bool[F], listed in ``work``) and
+    blend them over its opaque image. With the auto chunk, only the listed units are read,
+    shaded and sorted, in one launch over the list's filled prefix; with a chunk given or a
+    launch mode named, they are dispatched in chunks and the composite reads the draw list's
+    filled prefix. Their shading is added to ``counts``'s ``shade_invocations`` by the caller.
+    Returns (image, counts)."""
     if front is None:
         return image, counts
     h, w = image.shape[:2]
-    live = jnp.minimum(draw.fragments, draw.pixel.shape[0])  # one sample: a sorted prefix
-    layers = Layers(draw.pixel, draw.tri, draw.depth, front, values, live)
+    background = image.reshape(-1, 3)
     with jax.named_scope("transparent"):
-        out, extra = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
-    counts = dict(counts, **{k: v for k, v in extra.items() if k != "overflow"},
-                  transparent_invocations=jnp.sum(front, dtype=jnp.int32))
+        if launches_once(cfg.chunk):
+            def layers_of(part):
+                (items,) = part
+                listed = jnp.arange(items.shape[0], dtype=jnp.int32) < work.count
+                return draw.pixel[items], draw.tri[items], draw.depth[items], listed
+
+            out, extra, _ = blend_listed(scene, camera, clip, work.count, (work.items,),
+                                         layers_of, background, cfg)
+        else:
+            values, _ = layer_values(scene, camera, front, work, unit_points, cfg.chunk)
+            live = jnp.minimum(draw.fragments, draw.pixel.shape[0])  # one sample: a prefix
+            out, extra = composite(scene, Layers(draw.pixel, draw.tri, draw.depth, front,
+                                                 values, live), background, settings_of(cfg))
+    extra = dict(extra, transparent_invocations=work.count)
+    counts = dict(counts, **{k: v for k, v in extra.items() if k != "overflow"})
     counts["bytes_intermediate"] = counts["bytes_intermediate"] + extra["transparent_bytes"]
     counts["overflow"] = counts["overflow"] + extra["overflow"]
     return out.reshape(h, w, 3), counts

@@ -200,21 +200,39 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
 
 def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Array, cfg):
     """``transparent_pass``'s depth test, shading and composite in one launch over the fragment
-    list's filled prefix (``on_prefix``: one host read), where the chunked dispatch reads the
-    host once a launch and scatters into an array the size of the whole list. Past the shortest
-    prefix every entry runs the layer shader, those not in front as idle lanes: the prefix
-    lengths step by at most 1.5x, so at most a third of the lanes idle past the live fragments.
-    A list that fits the shortest prefix (an eighth of its capacity, half a screen by default)
-    has its front fragments compacted and shaded in chunks instead, so that a few fragments do
-    not launch half a screen of lanes. Each prefix length compiles its own copy of the layer
-    shader, and the longest shades the whole capacity at once (its temporaries included).
-    Returns (image float32[P, 3], counts, the layer shader's lanes launched int32)."""
-    n_pix, shader, settings = background.shape[0], layer_shader(scene, camera), settings_of(cfg)
-    shortest = prefix_sizes(fr.pixel.shape[0])[0]
+    list's filled prefix (``blend_listed``). Returns (image float32[P, 3], counts, the layer
+    shader's lanes launched int32)."""
+    n_pix = background.shape[0]
+
+    def layers_of(part):
+        valid, pixel, tri, depth = part
+        return pixel, tri, depth, in_front(valid, pixel, depth, opaque_depth, n_pix)
+
+    image, counts, lanes = blend_listed(scene, camera, clip, live_fragments(fr),
+                                        (fr.valid, fr.pixel, fr.tri, fr.depth), layers_of,
+                                        background, cfg)
+    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
+    return image, counts, lanes
+
+
+def blend_listed(scene, camera, clip, count: Array, rows, layers_of, background: Array, cfg):
+    """Shade and composite the layers of a list whose entries at and past ``count`` are empty,
+    in one launch over its filled prefix (``on_prefix``: one host read), where the chunked
+    dispatch reads the host once a launch and scatters into an array the size of the whole
+    list. ``layers_of(rows cut to the prefix) -> (pixel, tri, depth, front)``: the layers,
+    those not ``front`` neither shaded nor blended. Past the shortest prefix every entry runs
+    the layer shader, those not in front as idle lanes: the prefix lengths step by at most
+    1.5x, so at most a third of the lanes idle past the live entries. A list that fits the
+    shortest prefix (an eighth of its capacity) has its front entries compacted and shaded in
+    chunks instead, so that a few layers do not launch an eighth of the list's lanes. Each
+    prefix length compiles its own copy of the layer shader, and the longest shades the whole
+    capacity at once (its temporaries included). Returns (image float32[P, 3], counts, the
+    layer shader's lanes launched int32)."""
+    shader, settings = layer_shader(scene, camera), settings_of(cfg)
+    shortest = prefix_sizes(jax.tree_util.tree_leaves(rows)[0].shape[0])[0]
 
     def on_filled(part, bg):
-        valid, pixel, tri, depth = part
-        front = in_front(valid, pixel, depth, opaque_depth, n_pix)
+        pixel, tri, depth, front = layers_of(part)
 
         def points_of(items):
             return points_at(scene, camera, clip, cfg, tri[items], pixel[items])
@@ -235,10 +253,8 @@ def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Ar
                                            settings)
         return (), (image, counts, lanes)
 
-    _, (image, counts, lanes) = on_prefix(on_filled, live_fragments(fr),
-                                          (fr.valid, fr.pixel, fr.tri, fr.depth), background)
+    _, (image, counts, lanes) = on_prefix(on_filled, count, rows, background)
     counts["transparent_invocations"] = counts["transparent_fragments"]
-    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return image, counts, lanes
 
 
@@ -378,7 +394,7 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
     return mean * (1.0 - reveal)[:, None] + reveal[:, None] * background + glow
 
 
-__all__ = ["blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list",
+__all__ = ["blend_listed", "blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list",
            "front_work", "in_front", "LAYER_BYTES", "layer_values",
            "layer_shader", "Layers", "live_fragments", "merge_counts",
            "refuse_transparency", "settings_of", "shade_layers",

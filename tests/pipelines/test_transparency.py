@@ -174,3 +174,28 @@ def test_the_pass_leaves_a_deferred_frame_as_its_neutral_settings_promise(monkey
         for key, value in want.counts.items():
             np.testing.assert_array_equal(np.asarray(got.counts[key]), np.asarray(value),
                                           err_msg=f"{name}: {key}")
+
+
+def test_forward_runs_the_layer_shader_on_its_transparent_units_alone():
+    # Forward shades its opaque units with the three-channel shader; the layer shader (colour,
+    # opacity, depth) runs in the transparent pass over the listed transparent units. Read off
+    # the traced program: the dispatch loop of the opaque units writes a float32[F, 3] array
+    # for the F entries of the draw list, and no loop writes five channels for as many.
+    from jaxrender.pipelines.forward import frame
+    from tests.jaxpr_walk import all_equations
+
+    scene = layered_quads(THREE)
+    cfg = make_config("forward", width=W, height=H)
+    closed = jax.make_jaxpr(lambda: frame(scene, scene.camera, cfg))()
+    rows = {3: [], 5: []}
+    for eqn in all_equations(closed.jaxpr):
+        if eqn.primitive.name != "while":
+            continue
+        for v in eqn.outvars:
+            shape = v.aval.shape
+            if len(shape) == 2 and shape[1] in rows and v.aval.dtype == np.float32:
+                rows[shape[1]].append(shape[0])
+    assert rows[3], "no dispatch loop writes the opaque units' colours"
+    n_units = max(rows[3])
+    assert all(n < n_units for n in rows[5]), (
+        f"a loop writes layer values for {max(rows[5])} entries, the draw list's {n_units}")
