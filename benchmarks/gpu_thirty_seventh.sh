@@ -8,6 +8,16 @@
 # textaps: gpu_thirty_sixth.sh's, glass only (forward and deferred, A B B A): the texture
 #   filter's taps computed whole (benchmarks/variants/texture_taps_whole.patch; build
 #   .v/textaps as that script's header says). Predicted within +-0.1 ms a frame.
+# Call 2 (carry [".whl", ".v/head37"]; .v/head37 from `git archive 13f8468 jaxrender`):
+#   bash benchmarks/gpu_thirty_seventh.sh fwdsplit
+# fwdsplit: forward's opaque units shaded with the three-channel shader and its transparent
+#   units in a pass of their own over their compacted list (shaded and composited in one
+#   launch over its filled prefix), against 13f8468, A B B A on glass and room; then this
+#   tree's forward on glass by scope. Prediction from prof37 (call 1): glass 0.4-0.7 ms a
+#   frame faster (the opaque lanes no longer run the opacity and texture filter twice; the
+#   composite's 64-bit sort covers the 1.56M-entry prefix of 1.23M listed layers, not the
+#   4.15M of the draw list's 3.29M fragments: 0.377 ms of cub sorts in call 1's profile);
+#   room unchanged (no transparency: the same program).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
@@ -31,6 +41,15 @@ for part in $(targets_first "$*"); do
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side textaps 120 "after textaps" --scenes glass --pipelines deferred forward
+  elif [ "$part" = fwdsplit ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side fwdsplit 120 "head37 after" --scenes glass room --pipelines forward
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py forward \
+      --scene glass --top 30 --calls 3 --scope-top 6 $(printf -- '--scope %s ' fragments \
+      depth_test quads shade resolve counts transparent layer_shading composite sorted_blend) \
+      2>&1 | quiet | tee -a "$OUT/fwdsplit_prof.md"
   fi
   bundle_out
 done
