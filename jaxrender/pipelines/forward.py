@@ -33,10 +33,12 @@ from jaxrender.pipelines.quads import (BIG, exclusive_lane_cummin, exclusive_seg
                                        quad_list, segment_starts)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
-from jaxrender.pipelines.forward_transparency import forward_blend, forward_front, forward_split
+from jaxrender.pipelines.forward_transparency import (forward_faces, forward_transparent,
+                                                       merge_transparent)
 from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
                                             points_at_xy, raster_fragments)
 from jaxrender.pipelines.waves import check_wave_size
+from jaxrender.raster.fragments import Fragments
 from jaxrender.shading import alpha_test, shade
 from jaxrender.sorting import EMPTY, lex_sort, lex_sort_prefix, on_prefix
 from jaxrender.types import Array, Frame
@@ -94,9 +96,10 @@ class DrawList(NamedTuple):
     lane: Array | None = None
 
 
-def draw_list(scene, clip, offsets, cfg: ForwardConfig) -> DrawList:
-    """The draw replayed from the fragment lists of every sample offset."""
-    lists = [raster_fragments(clip, scene.faces, cfg, cull_backfaces=cfg.cull_backfaces,
+def draw_list(scene, clip, offsets, cfg: ForwardConfig, faces: Array) -> DrawList:
+    """The draw of ``faces`` (the scene's, some made degenerate) replayed from the fragment
+    lists of every sample offset."""
+    lists = [raster_fragments(clip, faces, cfg, cull_backfaces=cfg.cull_backfaces,
                               sample_offset=o) for o in offsets]
     n_pix, n_tris = cfg.width * cfg.height, scene.faces.shape[0]
     if len(lists) == 1:
@@ -230,58 +233,49 @@ def depth_test(draw: DrawList, keep: Array, n_s: int, cfg: ForwardConfig):
     return _any_per_unit(draw, shaded), win, zbuf
 
 
-def replay(draw: DrawList, opaque_valid: Array, transparent, keep: Array, n_s: int, cfg):
+def replay(draw: DrawList, keep: Array, n_s: int, cfg):
     """The draw replayed over the list's filled prefix only (``on_prefix``): the depth test,
-    the transparent fragments in front (None without), the first unit of each (triangle,
-    quad) when the sort already grouped them and each pixel's shade count (both over the
-    opaque and the transparent units); then the work lists of the opaque units and of the
-    transparent ones, compacted outside the branch (inside it was slower on foliage;
-    RESULTS.md). Returns (opaque units bool[F], win int32[S * P], blended bool[F] or None,
-    first bool[F] or None, opaque WorkList, transparent WorkList or None, per-pixel shades
-    int32[P])."""
+    the first unit of each (triangle, quad) when the sort already grouped them and each
+    pixel's shade count; then the shading work list, compacted outside the branch (inside it
+    was slower on foliage; RESULTS.md). Returns (shade_unit bool[F], win int32[S * P],
+    first bool[F] or None, WorkList, per-pixel shades int32[P], the final depth
+    float32[S * P], +inf where none)."""
     n_pix = cfg.width * cfg.height
     marks_quads = draw.lane is not None and not cfg.shade_helpers
-    rows = {"draw": live_rows(draw), "opaque": opaque_valid, "keep": keep}
-    if transparent is not None:
-        rows["transparent"] = transparent
 
     def run(rows, _):
         d = draw._replace(**rows["draw"])
-        shade_unit, win, z_final = depth_test(d._replace(valid=rows["opaque"]), rows["keep"],
-                                              n_s, cfg)
-        blended = forward_front(d, rows.get("transparent"), z_final)
-        units = shade_unit if blended is None else shade_unit | blended
-        out = {"shade": shade_unit, "blended": blended}
+        shade_unit, win, z_final = depth_test(d, rows["keep"], n_s, cfg)
+        out = {"shade": shade_unit}
         if marks_quads:
-            out["first"] = first_units_of_quads(d.tri, d.seg, units)
+            out["first"] = first_units_of_quads(d.tri, d.seg, shade_unit)
         per_pixel = jnp.zeros((n_pix,), jnp.int32).at[
-            jnp.where(units, d.pixel, n_pix)].add(1, mode="drop")
-        return {k: v for k, v in out.items() if v is not None}, (win, per_pixel)
+            jnp.where(shade_unit, d.pixel, n_pix)].add(1, mode="drop")
+        return out, (win, per_pixel, z_final)
 
-    out, (win, per_pixel) = on_prefix(run, live_count(draw), rows)
-    blended = out.get("blended")
-    return (out["shade"], win, blended, out.get("first"), dispatch.WorkList.of(out["shade"]),
-            None if blended is None else dispatch.WorkList.of(blended), per_pixel)
+    out, (win, per_pixel, z_final) = on_prefix(run, live_count(draw),
+                                               {"draw": live_rows(draw), "keep": keep})
+    return (out["shade"], win, out.get("first"), dispatch.WorkList.of(out["shade"]), per_pixel,
+            z_final)
 
 
 @register_frame("forward", ForwardConfig)
 def frame(scene, camera, cfg: ForwardConfig) -> Frame:
-    """Forward shading in submission order (overdraw, 2x2 quads, optional Z pre-pass, MSAA)."""
+    """Forward shading in submission order (overdraw, 2x2 quads, optional Z pre-pass, MSAA),
+    the opaque geometry first, then the transparent geometry blended over it."""
     offsets = sample_patterns.msaa(cfg.msaa) if cfg.msaa > 1 else sample_patterns.CENTER
     n_s = len(offsets)
     clip = clip_vertices(scene, camera, cfg)
     with jax.named_scope("fragments"):
-        draw = draw_list(scene, clip, offsets, cfg)
+        draw = draw_list(scene, clip, offsets, cfg, forward_faces(scene, cfg))
 
     def unit_points(items):
         return points_at(scene, camera, clip, cfg, draw.tri[items], draw.pixel[items])
 
-    opaque, transparent = forward_split(scene, draw, cfg)  # transparent: None without
     with jax.named_scope("alpha_test"):
-        keep, alpha_invocations = alpha_pass(scene, opaque, unit_points, cfg)
+        keep, alpha_invocations = alpha_pass(scene, draw, unit_points, cfg)
     with jax.named_scope("depth_test"):
-        shade_unit, win, blended, first, work, blended_work, per_pixel = replay(
-            draw, opaque.valid, transparent, keep, n_s, cfg)
+        shade_unit, win, first, work, per_pixel, z_final = replay(draw, keep, n_s, cfg)
     with jax.named_scope("quads"):
         if first is None:  # the helper lanes need the quads listed
             ql = quad_list(draw.tri, draw.pixel, shade_unit, cfg.width, cfg.height,
@@ -300,15 +294,35 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
                                            colours, cfg.chunk)
     with jax.named_scope("resolve"):
         image, covered = resolve_samples(colours, draw, win, n_s, cfg)
+    image, blended, fr_t, front_t = forward_transparent(scene, camera, clip, image, z_final, cfg)
     with jax.named_scope("counts"):
-        invocations = work.invocations + (0 if blended_work is None else blended_work.count)
-        counts = _counts(scene, draw, quads, invocations, covered, alpha_invocations, cfg)
+        invocations, fragments = work.invocations, draw.fragments
+        if blended is not None:  # the transparent pass's quads join the opaque pass's
+            invocations = invocations + blended["transparent_invocations"]
+            fragments = fragments + fr_t.count
+            quads = joined_quads(quads, fr_t, front_t, cfg, scene.faces.shape[0])
+            per_pixel = per_pixel.at[jnp.where(front_t, fr_t.pixel, per_pixel.shape[0])].add(
+                1, mode="drop")
+        counts = _counts(scene, draw, quads, invocations, fragments, covered, alpha_invocations,
+                         cfg)
         # The pre-pass transforms every vertex again (positions only).
         counts.update(vertex_counts(scene, full_passes=1, position_passes=int(cfg.z_prepass)))
-    image, counts = forward_blend(scene, camera, clip, draw, blended, blended_work, unit_points,
-                                  image, counts, cfg)
+        if blended is not None:
+            counts = merge_transparent(counts, blended)
     image = poison_on_overflow(image, counts["overflow"])
     return Frame(image, counts, {"shade_count": per_pixel.reshape(cfg.height, cfg.width)})
+
+
+def joined_quads(quads, fr, front, cfg, n_tris: int):
+    """``quads`` (the opaque pass's: bool[N] one unit of each quad marked, int32[N] its
+    triangle, quad count) with the quads of the transparent fragments in front (a fragment
+    list and bool[F]): the units grouped by (2x2 quad, triangle) as the draw list groups them."""
+    start, tri, n_quads = quads
+    listed = single_sample_draw_list(Fragments(fr.pixel, fr.tri, fr.depth, front, fr.count),
+                                     cfg.width, cfg.height, n_tris)
+    first = first_units_of_quads(listed.tri, listed.seg, listed.valid)
+    return (jnp.concatenate([start, first]), jnp.concatenate([tri, listed.tri]),
+            n_quads + jnp.sum(first, dtype=jnp.int32))
 
 
 def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
@@ -322,7 +336,8 @@ def resolve_samples(colours, draw: DrawList, win, n_s: int, cfg):
     return image, covered
 
 
-def _counts(scene, draw: DrawList, quads, invocations, covered, alpha_invocations, cfg) -> dict:
+def _counts(scene, draw: DrawList, quads, invocations, fragments, covered, alpha_invocations,
+            cfg) -> dict:
     """``quads``: (bool[N] one unit of each quad marked, int32[N] its triangle, quad count).
     Waves: the quads of one draw, in rasterization order (``draw_waves``)."""
     quad_start, quad_tri, n_quads = quads
@@ -336,7 +351,7 @@ def _counts(scene, draw: DrawList, quads, invocations, covered, alpha_invocation
         quads=n_quads,
         # The shader's live lanes: the shaded units, plus the helper lanes when they run.
         shader_evaluations=lanes if cfg.shade_helpers else invocations,
-        fragments=draw.fragments,
+        fragments=fragments,
         alpha_invocations=alpha_invocations,
         overflow=draw.overflow,
     )

@@ -1,9 +1,9 @@
 """The transparent pass: blended surfaces composited over a pipeline's opaque result.
 
-Deferred, visibility-buffer, checkerboard and DACS shading hold one surface per pixel, so, as
-engines do, they resolve the opaque surfaces first and then run a forward pass over the
-transparent ones (``transparent_pass``); forward shades the transparent fragments in its own
-main pass and composites them here (``composite``); the reference does both per sub-sample.
+Deferred, visibility-buffer, checkerboard, DACS and TADS shading hold one surface per pixel,
+so, as engines do, they resolve the opaque surfaces first and then run a forward pass over the
+transparent ones (``transparent_pass``); forward draws its opaque triangles, then the same
+pass over the transparent ones (``blend_fragments``); the reference does both per sub-sample.
 
 Plan: the transparent triangles' fragment list (the opaque triangles made degenerate, so ids
 stay the scene's), every fragment strictly in front of the opaque depth of its pixel. Shade:
@@ -172,27 +172,33 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
     check_settings(scene, cfg)
     if not scene.effects.transparency:
         return image, {}
-    h, w = image.shape[:2]
     with jax.named_scope("transparent"):
         clip = clip_vertices(scene, camera, cfg)
         with jax.named_scope("fragments"):
             fr = transparent_fragments(scene, clip, cfg)
-        if dispatch.launches_once(cfg.chunk):
-            # Its lanes are left out of the counts: they follow the list's capacity, which
-            # like ``chunk`` must leave a frame's counts as they are (OUTPUT_NEUTRAL).
-            out, counts, _ = blend_on_prefix(scene, camera, clip, fr, image.reshape(-1, 3),
-                                             opaque_depth.reshape(-1), cfg)
-            return out.reshape(h, w, 3), counts
-        with jax.named_scope("front"):
-            front, work = front_work(fr, opaque_depth.reshape(-1), w * h)
+        return blend_fragments(scene, camera, clip, fr, image, opaque_depth.reshape(-1), cfg)
 
-        def points_of(items):
-            return points_at(scene, camera, clip, cfg, fr.tri[items], fr.pixel[items])
 
-        with jax.named_scope("layer_shading"):
-            layers, work = shade_layers(scene, camera, fr, front, work, points_of, cfg.chunk)
-        with jax.named_scope("composite"):
-            out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
+def blend_fragments(scene, camera, clip, fr, image: Array, opaque_depth: Array, cfg):
+    """The transparent fragment list ``fr``'s layers in front of opaque_depth float32[P]
+    shaded and blended over image float32[H, W, 3]. Returns (image, counts)."""
+    h, w = image.shape[:2]
+    if dispatch.launches_once(cfg.chunk):
+        # Its lanes are left out of the counts: they follow the list's capacity, which like
+        # ``chunk`` must leave a frame's counts as they are (OUTPUT_NEUTRAL).
+        out, counts, _ = blend_on_prefix(scene, camera, clip, fr, image.reshape(-1, 3),
+                                         opaque_depth, cfg)
+        return out.reshape(h, w, 3), counts
+    with jax.named_scope("front"):
+        front, work = front_work(fr, opaque_depth, w * h)
+
+    def points_of(items):
+        return points_at(scene, camera, clip, cfg, fr.tri[items], fr.pixel[items])
+
+    with jax.named_scope("layer_shading"):
+        layers, work = shade_layers(scene, camera, fr, front, work, points_of, cfg.chunk)
+    with jax.named_scope("composite"):
+        out, counts = composite(scene, layers, image.reshape(-1, 3), settings_of(cfg))
     counts["transparent_invocations"] = work.invocations
     counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return out.reshape(h, w, 3), counts
@@ -200,39 +206,21 @@ def transparent_pass(scene, camera, image: Array, opaque_depth: Array, cfg):
 
 def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Array, cfg):
     """``transparent_pass``'s depth test, shading and composite in one launch over the fragment
-    list's filled prefix (``blend_listed``). Returns (image float32[P, 3], counts, the layer
-    shader's lanes launched int32)."""
-    n_pix = background.shape[0]
-
-    def layers_of(part):
-        valid, pixel, tri, depth = part
-        return pixel, tri, depth, in_front(valid, pixel, depth, opaque_depth, n_pix)
-
-    image, counts, lanes = blend_listed(scene, camera, clip, live_fragments(fr),
-                                        (fr.valid, fr.pixel, fr.tri, fr.depth), layers_of,
-                                        background, cfg)
-    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
-    return image, counts, lanes
-
-
-def blend_listed(scene, camera, clip, count: Array, rows, layers_of, background: Array, cfg):
-    """Shade and composite the layers of a list whose entries at and past ``count`` are empty,
-    in one launch over its filled prefix (``on_prefix``: one host read), where the chunked
-    dispatch reads the host once a launch and scatters into an array the size of the whole
-    list. ``layers_of(rows cut to the prefix) -> (pixel, tri, depth, front)``: the layers,
-    those not ``front`` neither shaded nor blended. Past the shortest prefix every entry runs
-    the layer shader, those not in front as idle lanes: the prefix lengths step by at most
-    1.5x, so at most a third of the lanes idle past the live entries. A list that fits the
-    shortest prefix (an eighth of its capacity) has its front entries compacted and shaded in
-    chunks instead, so that a few layers do not launch an eighth of the list's lanes. Each
-    prefix length compiles its own copy of the layer shader, and the longest shades the whole
-    capacity at once (its temporaries included). Returns (image float32[P, 3], counts, the
-    layer shader's lanes launched int32)."""
-    shader, settings = layer_shader(scene, camera), settings_of(cfg)
-    shortest = prefix_sizes(jax.tree_util.tree_leaves(rows)[0].shape[0])[0]
+    list's filled prefix (``on_prefix``: one host read), where the chunked dispatch reads the
+    host once a launch and scatters into an array the size of the whole list. Past the shortest
+    prefix every entry runs the layer shader, those not in front as idle lanes: the prefix
+    lengths step by at most 1.5x, so at most a third of the lanes idle past the live fragments.
+    A list that fits the shortest prefix (an eighth of its capacity, half a screen by default)
+    has its front fragments compacted and shaded in chunks instead, so that a few fragments do
+    not launch half a screen of lanes. Each prefix length compiles its own copy of the layer
+    shader, and the longest shades the whole capacity at once (its temporaries included).
+    Returns (image float32[P, 3], counts, the layer shader's lanes launched int32)."""
+    n_pix, shader, settings = background.shape[0], layer_shader(scene, camera), settings_of(cfg)
+    shortest = prefix_sizes(fr.pixel.shape[0])[0]
 
     def on_filled(part, bg):
-        pixel, tri, depth, front = layers_of(part)
+        valid, pixel, tri, depth = part
+        front = in_front(valid, pixel, depth, opaque_depth, n_pix)
 
         def points_of(items):
             return points_at(scene, camera, clip, cfg, tri[items], pixel[items])
@@ -253,8 +241,10 @@ def blend_listed(scene, camera, clip, count: Array, rows, layers_of, background:
                                            settings)
         return (), (image, counts, lanes)
 
-    _, (image, counts, lanes) = on_prefix(on_filled, count, rows, background)
+    _, (image, counts, lanes) = on_prefix(on_filled, live_fragments(fr),
+                                          (fr.valid, fr.pixel, fr.tri, fr.depth), background)
     counts["transparent_invocations"] = counts["transparent_fragments"]
+    counts["overflow"] = counts["overflow"] + fr.overflowed.astype(jnp.int32)
     return image, counts, lanes
 
 
@@ -394,8 +384,8 @@ def weighted_composite(scene, layers: Layers, background) -> Array:
     return mean * (1.0 - reveal)[:, None] + reveal[:, None] * background + glow
 
 
-__all__ = ["blend_listed", "blend_on_prefix", "BlendSettings", "check_settings", "composite", "composite_list",
-           "front_work", "in_front", "LAYER_BYTES", "layer_values",
+__all__ = ["blend_fragments", "blend_on_prefix", "BlendSettings", "check_settings", "composite",
+           "composite_list", "front_work", "in_front", "LAYER_BYTES", "layer_values",
            "layer_shader", "Layers", "live_fragments", "merge_counts",
            "refuse_transparency", "settings_of", "shade_layers",
            "sorted_composite", "transparent_fragments", "transparent_pass", "wboit_weight",

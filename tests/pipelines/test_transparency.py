@@ -199,3 +199,19 @@ def test_forward_runs_the_layer_shader_on_its_transparent_units_alone():
     n_units = max(rows[3])
     assert all(n < n_units for n in rows[5]), (
         f"a loop writes layer values for {max(rows[5])} entries, the draw list's {n_units}")
+
+
+def test_forward_lists_its_opaque_and_transparent_fragments_apart():
+    # As engines draw them: the opaque triangles' fragments in forward's draw list, the
+    # transparent ones in the transparent pass's own list, each of fragment_capacity
+    # entries. A capacity of one fragment a pixel holds the background's fragments and the
+    # two quads' (under 576 each), not all of them together.
+    scene = layered_quads(TWO)
+    whole = _render(scene, "forward")
+    total = int(whole.counts["fragments"])
+    assert total > W * H, f"the scene's {total} fragments fit one list of {W * H}"
+    tight = _render(scene, "forward", fragment_capacity=W * H)
+    assert int(tight.counts["overflow"]) == 0, "a list overflowed"
+    assert int(tight.counts["fragments"]) == total, "fragments counted"
+    np.testing.assert_array_equal(np.asarray(tight.image), np.asarray(whole.image),
+                                  err_msg="forward with one fragment a pixel a list")
