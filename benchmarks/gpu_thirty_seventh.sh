@@ -8,21 +8,24 @@
 # textaps: gpu_thirty_sixth.sh's, glass only (forward and deferred, A B B A): the texture
 #   filter's taps computed whole (benchmarks/variants/texture_taps_whole.patch; build
 #   .v/textaps as that script's header says). Predicted within +-0.1 ms a frame.
-# Call 2 (carry [".whl", ".v/head37", ".v/fine"]; .v/head37 from `git archive 13f8468
-#   jaxrender`, .v/fine this tree with benchmarks/variants/layer_prefix_fine.patch applied):
+# Call 2 (carry [".whl", ".v/head37", ".v/split", ".v/fine"]; .v/head37 from `git archive
+#   13f8468 jaxrender`, .v/split from `git archive 7756b16 jaxrender`, .v/fine this tree with
+#   benchmarks/variants/layer_prefix_fine.patch applied):
 #   bash benchmarks/gpu_thirty_seventh.sh fwdsplit
-# fwdsplit: forward's opaque units shaded with the three-channel shader and its transparent
-#   units in a pass of their own over their compacted list (shaded and composited in one
-#   launch over its filled prefix), against 13f8468, on glass (A B C C B A with `fine`);
-#   then this tree's forward on glass by scope. Room is left out: without transparency its
-#   program is the same. Prediction from prof37 (call 1): forward on glass 0.4-0.7 ms a
-#   frame faster (the opaque lanes no longer run the opacity; the composite's 64-bit sort
-#   covers the 1.56M-entry prefix of 1.23M listed layers, not the 4.15M of the draw list's
-#   3.29M fragments: 0.377 ms of cub sorts in call 1's profile); deferred unchanged.
-# fine (in fwdsplit): the layer shader's launch over the list's prefix in steps of at most
-#   1.25x (benchmarks/variants/layer_prefix_fine.patch): glass's 1,248,672 listed fragments
-#   in 1,296,000 lanes, not 1,555,200. Predicted: deferred and forward on glass 0.08-0.13 ms
-#   faster (layer shading 0.503 ms over 1.56M lanes, and the composite's sort on the prefix).
+# fwdsplit: forward on glass in four trees, A B C D D C B A: 13f8468; split (7756b16: its
+#   opaque units shaded with the three-channel shader, its transparent units compacted and
+#   shaded and composited in one launch over that list's prefix); after (this tree: its draw
+#   list holds the opaque triangles alone, and the transparent ones go through the shared
+#   transparent pass); fine (after, with the layer shader's launch over the transparent list's
+#   prefix in steps of at most 1.25x: glass's 1,248,672 listed fragments in 1,296,000 lanes,
+#   not 1,555,200). Then deferred on glass, after against fine (A B B A), and this tree's
+#   forward on glass by scope. Room is left out: without transparency its program is the
+#   same in all four. Predictions from prof37 (call 1), ms a frame on glass: split 0.4-0.7
+#   faster than 13f8468 (the opaque lanes no longer run the opacity; the composite's 64-bit
+#   sort covers a 1.56M-entry prefix, not the draw list's 4.15M: 0.377 ms of cub sorts);
+#   after 0.2-0.4 faster than split (the sort, depth test and derived fields over a 2.07M
+#   prefix of 2.05M opaque fragments, not 4.15M of 3.29M; the transparent list's raster
+#   0.18 more); fine 0.08-0.13 faster than after, for deferred too.
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
@@ -50,8 +53,11 @@ for part in $(targets_first "$*"); do
     export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
-    side_by_side fwdsplit 150 "head37 after fine" --scenes glass --pipelines forward deferred
-    PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py forward \
+    side_by_side fwdsplit 100 "head37 split after fine" --scenes glass --pipelines forward
+    bundle_out
+    side_by_side fwdsplit_def 120 "after fine" --scenes glass --pipelines deferred
+    bundle_out
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 90 python3 benchmarks/profile_kernels.py forward \
       --scene glass --top 30 --calls 3 --scope-top 6 $(printf -- '--scope %s ' fragments \
       depth_test quads shade resolve counts transparent layer_shading composite sorted_blend) \
       2>&1 | quiet | tee -a "$OUT/fwdsplit_prof.md"
