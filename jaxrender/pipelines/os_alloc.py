@@ -39,8 +39,9 @@ def allocate(fp: Footprint, sheet: ShadeSheet, capacity: int, bias0: float, bias
     nc = sheet.n_chunks
 
     def mark(bias):
-        m = mark_chunks(taps(fp, sheet, bias, mode, aniso_taps), nc)
-        return m, jnp.sum(m, dtype=jnp.int32)
+        t = taps(fp, sheet, bias, mode, aniso_taps)
+        m = mark_chunks(t, nc)
+        return t, m, jnp.sum(m, dtype=jnp.int32)
 
     # Past this bias every covered pixel sits at its object's coarsest level: raising it
     # further cannot reduce the work.
@@ -48,19 +49,20 @@ def allocate(fp: Footprint, sheet: ShadeSheet, capacity: int, bias0: float, bias
     max_bias = jnp.max(jnp.where(fp.covered, top - lod, 0.0), initial=0.0) + 1.0
 
     def cond(c):
-        bias, _, n, _ = c
+        bias, _, _, n, _ = c
         return (n > capacity) & (bias < max_bias)
 
     def body(c):
-        bias, _, _, k = c
+        bias, _, _, _, k = c
         bias = bias + jnp.float32(bias_step)
         return (bias, *mark(bias), k + 1)
 
-    # The marking of the last bias tried is the one allocated: carried out of the loop, not
-    # redone (each marking is a scatter over every tap).
+    # The taps and marking of the last bias tried are the ones allocated: carried out of the
+    # loop, not redone (the taps are a few values a pixel and tap, the marking a scatter over
+    # them all).
     b0 = jnp.float32(bias0)
-    bias, marked, n, steps = jax.lax.while_loop(cond, body, (b0, *mark(b0), jnp.int32(0)))
-    t = taps(fp, sheet, bias, mode, aniso_taps)
+    bias, t, marked, n, steps = jax.lax.while_loop(cond, body,
+                                                   (b0, *mark(b0), jnp.int32(0)))
     rank = jnp.cumsum(marked, dtype=jnp.int32) - 1
     page = jnp.where(marked & (rank < capacity), rank, -1)
     ids, _ = compact_indices(marked, capacity, fill_value=-1)

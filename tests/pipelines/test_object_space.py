@@ -207,3 +207,21 @@ def test_config_validation():
         osp.ObjectSpaceConfig(filter="nearest")
     with pytest.raises(ValueError, match="shade_every"):
         osp.ObjectSpaceConfig(shade_every=0)
+
+
+def test_allocation_computes_the_taps_once_a_bias_tried(monkeypatch):
+    # The taps of the last bias tried are the ones the frame reads: carried out of the bias
+    # loop, not computed a second time. Traced: once for the first bias, once for the loop's
+    # body (the frame's other taps are its counts' finest-level marking).
+    import jaxrender.pipelines.os_alloc as os_alloc
+
+    scene = plane_scene()
+    cfg = osp.ObjectSpaceConfig(width=W, height=H, sheet_resolution=W, store_shadels=6 * LANES)
+    sheet = osp.prepare(scene, cfg)
+    traced = []
+    real = os_alloc.taps
+    monkeypatch.setattr(os_alloc, "taps", lambda *a, **k: traced.append(1) or real(*a, **k))
+    closed = jax.make_jaxpr(lambda sc, sh: osp.frame_step(
+        sc, sh, sc.camera, cfg, osp.empty_state(sh, cfg), jnp.bool_(True))[0].image)
+    closed(scene, sheet)
+    assert len(traced) == 2, f"allocate traced the taps {len(traced)} times"
