@@ -26,6 +26,12 @@
 #   after 0.2-0.4 faster than split (the sort, depth test and derived fields over a 2.07M
 #   prefix of 2.05M opaque fragments, not 4.15M of 3.29M; the transparent list's raster
 #   0.18 more); fine 0.08-0.13 faster than after, for deferred too.
+# Call 3 (carry [".whl", ".v/base_os"]; .v/base_os from `git archive b186e57 jaxrender`):
+#   bash benchmarks/gpu_thirty_seventh.sh ostaps
+# ostaps: object space on glass, b186e57 against this tree (A B B A): the allocation's taps
+#   carried out of its bias loop instead of computed again. Predicted 0.1-0.25 ms a frame
+#   faster (call 1, H100: mark/allocate 0.824 ms with two 0.24 ms fusions of [4147200, 8]
+#   taps; the offline program now holds one of them).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
@@ -61,6 +67,11 @@ for part in $(targets_first "$*"); do
       --scene glass --top 30 --calls 3 --scope-top 6 $(printf -- '--scope %s ' fragments \
       depth_test quads shade resolve counts transparent layer_shading composite sorted_blend) \
       2>&1 | quiet | tee -a "$OUT/fwdsplit_prof.md"
+  elif [ "$part" = ostaps ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side ostaps 75 "base_os after" --scenes glass --pipelines object_space
   fi
   bundle_out
 done
