@@ -32,6 +32,12 @@
 #   carried out of its bias loop instead of computed again. Predicted 0.1-0.25 ms a frame
 #   faster (call 1, H100: mark/allocate 0.824 ms with two 0.24 ms fusions of [4147200, 8]
 #   taps; the offline program now holds one of them).
+# Prepared for a later call, not run (carry [".whl", ".v/markonce"]; .v/markonce this tree with
+#   benchmarks/variants/mark_chunks_once_a_pixel.patch applied):
+#   bash benchmarks/gpu_thirty_seventh.sh markonce
+# markonce: object space on glass and room, this tree against markonce (A B B A): a chunk
+#   marked once a pixel (69% fewer marking stores, CPU count). Predicted 0.1-0.14 ms a frame
+#   faster on glass.
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
@@ -72,6 +78,11 @@ for part in $(targets_first "$*"); do
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side ostaps 75 "base_os after" --scenes glass --pipelines object_space
+  elif [ "$part" = markonce ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side markonce 90 "after markonce" --scenes glass room --pipelines object_space
   fi
   bundle_out
 done
