@@ -33,8 +33,8 @@ from jaxrender.pipelines.quads import (BIG, exclusive_lane_cummin, exclusive_seg
                                        quad_list, segment_starts)
 from jaxrender.pipelines.registry import REGISTRY, register_frame
 from jaxrender.pipelines.vertex_work import vertex_counts
-from jaxrender.pipelines.forward_transparency import (forward_faces, forward_transparent,
-                                                       merge_transparent)
+from jaxrender.pipelines.forward_transparency import forward_faces, forward_transparent
+from jaxrender.pipelines.transparency import merge_counts
 from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, points_at,
                                             points_at_xy, raster_fragments)
 from jaxrender.pipelines.waves import check_wave_size
@@ -294,11 +294,12 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
                                            colours, cfg.chunk)
     with jax.named_scope("resolve"):
         image, covered = resolve_samples(colours, draw, win, n_s, cfg)
-    image, blended, fr_t, front_t = forward_transparent(scene, camera, clip, image, z_final, cfg)
+    image, transparent, fr_t, front_t = forward_transparent(scene, camera, clip, image, z_final,
+                                                            cfg)
     with jax.named_scope("counts"):
         invocations, fragments = work.invocations, draw.fragments
-        if blended is not None:  # the transparent pass's quads join the opaque pass's
-            invocations = invocations + blended["transparent_invocations"]
+        if transparent is not None:  # the transparent pass's quads join the opaque pass's
+            invocations = invocations + transparent["transparent_invocations"]
             fragments = fragments + fr_t.count
             quads = joined_quads(quads, fr_t, front_t, cfg, scene.faces.shape[0])
             per_pixel = per_pixel.at[jnp.where(front_t, fr_t.pixel, per_pixel.shape[0])].add(
@@ -307,8 +308,8 @@ def frame(scene, camera, cfg: ForwardConfig) -> Frame:
                          cfg)
         # The pre-pass transforms every vertex again (positions only).
         counts.update(vertex_counts(scene, full_passes=1, position_passes=int(cfg.z_prepass)))
-        if blended is not None:
-            counts = merge_transparent(counts, blended)
+        if transparent is not None:
+            counts = merge_counts(counts, transparent, shading_counted=True)
     image = poison_on_overflow(image, counts["overflow"])
     return Frame(image, counts, {"shade_count": per_pixel.reshape(cfg.height, cfg.width)})
 

@@ -36,13 +36,4 @@ def forward_transparent(scene, camera, clip, image, z_final, cfg):
     return image, counts, fr, front
 
 
-def merge_transparent(counts: dict, transparent: dict) -> dict:
-    """Forward's counts with its transparent pass's keys, bytes and overflows: its shading is
-    already in ``shade_invocations`` (counted with the quads of both passes)."""
-    out = dict(counts, **{k: v for k, v in transparent.items() if k != "overflow"})
-    out["bytes_intermediate"] = counts["bytes_intermediate"] + transparent["transparent_bytes"]
-    out["overflow"] = counts["overflow"] + transparent["overflow"]
-    return out
-
-
-__all__ = ["forward_faces", "forward_transparent", "merge_transparent"]
+__all__ = ["forward_faces", "forward_transparent"]

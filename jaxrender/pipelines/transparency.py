@@ -248,13 +248,17 @@ def blend_on_prefix(scene, camera, clip, fr, background: Array, opaque_depth: Ar
     return image, counts, lanes
 
 
-def merge_counts(counts: dict, transparent: dict) -> dict:
+def merge_counts(counts: dict, transparent: dict, shading_counted: bool = False) -> dict:
     """A pipeline's counts with its transparent pass's: the shading and bytes added to
-    ``shade_invocations`` and ``bytes_intermediate``, the overflows summed."""
+    ``shade_invocations`` and ``bytes_intermediate``, the overflows summed. With
+    ``shading_counted`` (forward: counted with the quads of both passes), the shading is
+    already in ``shade_invocations``."""
     if not transparent:
         return counts
     out = dict(counts, **{k: v for k, v in transparent.items() if k != "overflow"})
-    out["shade_invocations"] = counts["shade_invocations"] + transparent["transparent_invocations"]
+    if not shading_counted:
+        out["shade_invocations"] = (counts["shade_invocations"]
+                                    + transparent["transparent_invocations"])
     out["bytes_intermediate"] = counts["bytes_intermediate"] + transparent["transparent_bytes"]
     out["overflow"] = counts.get("overflow", jnp.int32(0)) + transparent["overflow"]
     return out
