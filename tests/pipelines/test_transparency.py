@@ -154,15 +154,17 @@ def test_blending_settings_are_refused_without_transparency():
         make_config("forward", oit="weighted", sort_transparent=False)
 
 
-def test_the_pass_leaves_a_deferred_frame_as_its_neutral_settings_promise(monkeypatch):
+@pytest.mark.parametrize("pipeline", ["deferred", "forward"])
+def test_the_pass_leaves_a_frame_as_its_neutral_settings_promise(monkeypatch, pipeline):
     """The auto chunk takes the one-launch pass, a chunk given (or a launch mode named) the
     chunked one, and a longer fragment list other prefix lengths: ``chunk`` and
     ``fragment_capacity`` are OUTPUT_NEUTRAL, so the image bit for bit and every count stay as
-    they are. (Checkerboard, DACS and the visibility buffer call the same pass.)"""
+    they are. (Checkerboard, DACS and the visibility buffer call the pass as deferred does;
+    forward calls it after its opaque draw.)"""
     monkeypatch.delenv(ENV_LAUNCH, raising=False)
     scene = layered_quads(THREE)
-    assert {"chunk", "fragment_capacity"} <= set(make_config("deferred").OUTPUT_NEUTRAL)
-    frames = {name: _render(scene, "deferred", **params)  # the first as the tests above
+    assert {"chunk", "fragment_capacity"} <= set(make_config(pipeline).OUTPUT_NEUTRAL)
+    frames = {name: _render(scene, pipeline, **params)  # the first as the tests above
               for name, params in [("one launch", {}), ("chunks of 64", {"chunk": 64}),
                                    ("a longer list", {"fragment_capacity": 16 * W * H})]}
     want = frames["one launch"]
