@@ -38,6 +38,8 @@
 # markonce: object space on glass and room, this tree against markonce (A B B A): a chunk
 #   marked once a pixel (69% fewer marking stores, CPU count). Predicted 0.1-0.14 ms a frame
 #   faster on glass.
+#   drawprefix (carry .v/drawprefix: this tree with benchmarks/variants/draw_list_on_prefix.patch):
+#   forward on glass and room against it (A B B A); predicted 0.04-0.1 ms a frame faster.
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
@@ -83,6 +85,11 @@ for part in $(targets_first "$*"); do
       JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
     S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
     side_by_side markonce 90 "after markonce" --scenes glass room --pipelines object_space
+  elif [ "$part" = drawprefix ]; then
+    export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+      JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+    S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+    side_by_side drawprefix 90 "after drawprefix" --scenes glass room --pipelines forward
   fi
   bundle_out
 done
