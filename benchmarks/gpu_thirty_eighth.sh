@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Thirty-eighth session. Call 1 (carry [".whl", ".v/markonce", ".v/drawprefix"]; each .v tree
+# is `git archive 8be7c70 jaxrender` with benchmarks/variants/mark_chunks_once_a_pixel.patch,
+# resp. draw_list_on_prefix.patch, applied):
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh markonce drawprefix prof38
+# markonce, drawprefix: gpu_thirty_seventh.sh's (predictions there: object space 0.1-0.14 ms a
+#   frame faster on glass; forward 0.04-0.1 faster on glass and room).
+# prof38: object space's and forward's 8-frame sequences on glass by scope (a still camera,
+#   state carried), each scope's longest kernels: where the frame's time goes inside a
+#   sequence, as the rows time it, after object space's taps change (not yet profiled).
+. "$(dirname "$0")/gpu_env.sh"
+export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+  JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+for part in $(targets_first "$*"); do
+  if [ "$part" = targets ]; then
+    NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_fifth.sh targets
+  elif [ "$part" = markonce ]; then
+    side_by_side markonce 90 "after markonce" --scenes glass room --pipelines object_space
+  elif [ "$part" = drawprefix ]; then
+    side_by_side drawprefix 90 "after drawprefix" --scenes glass room --pipelines forward
+  elif [ "$part" = prof38 ]; then
+    p() {  # p PIPELINE SCOPE...: its 8-frame sequence on glass, kernels by scope
+      local pipe=$1
+      shift
+      PYTHONPATH=$PWD:/tmp/site timeout -k 5 120 python3 benchmarks/profile_kernels.py "$pipe" \
+        --scene glass --frames 8 --top 40 --calls 3 --scope-top 8 \
+        $(printf -- '--scope %s ' "$@") 2>&1 | quiet | tee -a "$OUT/prof38.md"
+    }
+    p object_space mark_allocate reuse visibility shade resolve counts transparent_marking \
+      transparent_resolve transparent
+    p forward fragments alpha_test depth_test quads shade resolve counts transparent \
+      layer_shading composite sorted_blend
+  fi
+  bundle_out
+done
+exit 0
