@@ -1,16 +1,15 @@
 #!/usr/bin/env bash
-# Thirty-eighth session. Call 1 (carry [".whl", ".v/markonce", ".v/drawprefix"]; each .v tree
-# is `git archive 8be7c70 jaxrender` with benchmarks/variants/mark_chunks_once_a_pixel.patch,
-# resp. draw_list_on_prefix.patch, applied):
-#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh markonce drawprefix ostsizes
-# (.v/ostsizes likewise, with benchmarks/variants/os_transparent_rows_three_quarters.patch)
-# markonce, drawprefix: gpu_thirty_seventh.sh's (predictions there: object space 0.1-0.14 ms a
-#   frame faster on glass; forward 0.04-0.1 faster on glass and room).
+# Thirty-eighth session. Call 1 (carry [".whl", ".v/markonce", ".v/drawprefix",
+# ".v/ostsizes"]; each .v tree is `git archive 8be7c70 jaxrender` with one patch of
+# benchmarks/variants applied: mark_chunks_once_a_pixel, draw_list_on_prefix,
+# os_transparent_rows_three_quarters):
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh prof38 markonce drawprefix ostsizes
+# markonce, drawprefix: gpu_thirty_seventh.sh's, on glass alone (predictions there: object
+#   space 0.1-0.14 ms a frame faster on glass; forward 0.04-0.1 faster).
 # ostsizes: object space on glass against the patch that lets its transparent samples take a
 #   branch of three quarters of a screen's rows (glass at 1080p: 1,555,200 rows for 1,230,888
 #   fragments in front, not 2,073,600; the joined list 3.63M rows, not 4.15M). Predicted
 #   0.1-0.25 ms a frame faster; its cold compile about 1.5x (a third copy of the frame's tail).
-# Call 2: NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh prof38
 # prof38: object space's and forward's 8-frame sequences on glass by scope (a still camera,
 #   state carried), each scope's longest kernels: where the frame's time goes inside a
 #   sequence, as the rows time it, after object space's taps change (not yet profiled).
@@ -22,9 +21,9 @@ for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_fifth.sh targets
   elif [ "$part" = markonce ]; then
-    side_by_side markonce 90 "after markonce" --scenes glass room --pipelines object_space
+    side_by_side markonce 75 "after markonce" --scenes glass --pipelines object_space
   elif [ "$part" = drawprefix ]; then
-    side_by_side drawprefix 90 "after drawprefix" --scenes glass room --pipelines forward
+    side_by_side drawprefix 75 "after drawprefix" --scenes glass --pipelines forward
   elif [ "$part" = ostsizes ]; then
     side_by_side ostsizes 90 "after ostsizes" --scenes glass --pipelines object_space
   elif [ "$part" = prof38 ]; then
