@@ -13,6 +13,10 @@
 # prof38: object space's and forward's 8-frame sequences on glass by scope (a still camera,
 #   state carried), each scope's longest kernels: where the frame's time goes inside a
 #   sequence, as the rows time it, after object space's taps change (not yet profiled).
+# Last call, on an H200: bash benchmarks/gpu_thirty_eighth.sh ten1 ten2 (targets first)
+# ten1, ten2: the real-time pipelines on the ten built-in scenes besides glass and room, as the
+#   targets part times those two (8-frame pans, 3 rounds, images only); last timed on an H100
+#   in the twenty-fourth session (every row under 3 ms, forward's highest 2.97).
 . "$(dirname "$0")/gpu_env.sh"
 export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
   JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
@@ -20,6 +24,12 @@ S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outp
 for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_fifth.sh targets
+  elif [ "$part" = ten1 ] || [ "$part" = ten2 ]; then
+    scenes="stripes spheres foliage thin terrain"
+    [ "$part" = ten2 ] && scenes="sliver many_small foliage_wind spheres_spin grass"
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 290 $S --scenes $scenes --pipelines deferred forward \
+      checkerboard dacs visbuffer object_space tads --json "$OUT/$part.json" 2>&1 | quiet \
+      | grep '^|\|^#' | tee -a "$OUT/$part.md"
   elif [ "$part" = markonce ]; then
     side_by_side markonce 75 "after markonce" --scenes glass --pipelines object_space
   elif [ "$part" = drawprefix ]; then
