@@ -1,15 +1,21 @@
 #!/usr/bin/env bash
-# Thirty-eighth session. Call 1 (carry [".whl", ".v/markonce", ".v/drawprefix",
-# ".v/ostsizes"]; each .v tree is `git archive 8be7c70 jaxrender` with one patch of
-# benchmarks/variants applied: mark_chunks_once_a_pixel, draw_list_on_prefix,
+# Thirty-eighth session. Call 1 (carry [".whl", ".v/fwdnew", ".v/osnew"]; each .v tree is
+# `git archive 8be7c70 jaxrender` with patches of benchmarks/variants applied: fwdnew
+# draw_list_on_prefix and layer_texture_once, osnew mark_chunks_once_a_pixel and
 # os_transparent_rows_three_quarters):
-#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh prof38 markonce drawprefix ostsizes
-# markonce, drawprefix: gpu_thirty_seventh.sh's, on glass alone (predictions there: object
-#   space 0.1-0.14 ms a frame faster on glass; forward 0.04-0.1 faster).
-# ostsizes: object space on glass against the patch that lets its transparent samples take a
-#   branch of three quarters of a screen's rows (glass at 1080p: 1,555,200 rows for 1,230,888
-#   fragments in front, not 2,073,600; the joined list 3.63M rows, not 4.15M). Predicted
-#   0.1-0.25 ms a frame faster; its cold compile about 1.5x (a third copy of the frame's tail).
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh fwdnew osnew prof38
+# Device starts failed six times before it, so the variants run two by two, not one by one.
+# fwdnew: forward and deferred on glass, this tree against fwdnew (A B B A). Deferred's change
+#   is the layer shader's alone: the texture filtered once for the radiance and the opacity
+#   (offline H100 program: 8 texture gathers in the layer shading, not 16). Predicted:
+#   deferred 0.04-0.1 ms a frame faster; forward 0.08-0.2 (the draw list keyed, sorted and
+#   derived on its prefix: 0.04-0.1, gpu_thirty_seventh.sh, plus the layer shader's).
+# osnew: object space on glass, this tree against osnew (A B B A): a chunk marked once a
+#   pixel (69% fewer marking stores; predicted 0.1-0.14 ms a frame, gpu_thirty_seventh.sh)
+#   and its transparent samples in a branch of three quarters of a screen's rows (glass at
+#   1080p: 1,555,200 rows for 1,230,888 fragments in front, not 2,073,600; the joined list
+#   3.63M rows, not 4.15M; predicted 0.1-0.25 ms). Together 0.2-0.4 faster; the cold
+#   compile about 1.5x (a third copy of the frame's tail).
 # prof38: object space's and forward's 8-frame sequences on glass by scope (a still camera,
 #   state carried), each scope's longest kernels: where the frame's time goes inside a
 #   sequence, as the rows time it, after object space's taps change (not yet profiled).
@@ -30,12 +36,10 @@ for part in $(targets_first "$*"); do
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 290 $S --scenes $scenes --pipelines deferred forward \
       checkerboard dacs visbuffer object_space tads --json "$OUT/$part.json" 2>&1 | quiet \
       | grep '^|\|^#' | tee -a "$OUT/$part.md"
-  elif [ "$part" = markonce ]; then
-    side_by_side markonce 75 "after markonce" --scenes glass --pipelines object_space
-  elif [ "$part" = drawprefix ]; then
-    side_by_side drawprefix 75 "after drawprefix" --scenes glass --pipelines forward
-  elif [ "$part" = ostsizes ]; then
-    side_by_side ostsizes 90 "after ostsizes" --scenes glass --pipelines object_space
+  elif [ "$part" = fwdnew ]; then
+    side_by_side fwdnew 120 "after fwdnew" --scenes glass --pipelines forward deferred
+  elif [ "$part" = osnew ]; then
+    side_by_side osnew 100 "after osnew" --scenes glass --pipelines object_space
   elif [ "$part" = prof38 ]; then
     p() {  # p PIPELINE SCOPE...: its 8-frame sequence on glass, kernels by scope
       local pipe=$1
