@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Thirty-eighth session. Call 1 (carry [".whl", ".v/fwdnew", ".v/osnew"]; each .v tree is
 # `git archive 8be7c70 jaxrender` with patches of benchmarks/variants applied: fwdnew
-# draw_list_on_prefix and layer_texture_once, osnew mark_chunks_once_a_pixel and
-# os_transparent_rows_three_quarters):
+# draw_list_on_prefix and layer_texture_once, osnew mark_chunks_once_a_pixel,
+# os_transparent_rows_three_quarters and taps_one_index):
 #   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh fwdnew osnew prof38
 # Device starts failed six times before it, so the variants run two by two, not one by one.
 # fwdnew: forward and deferred on glass, this tree against fwdnew (A B B A). Deferred's change
@@ -10,12 +10,16 @@
 #   (offline H100 program: 8 texture gathers in the layer shading, not 16). Predicted:
 #   deferred 0.04-0.1 ms a frame faster; forward 0.08-0.2 (the draw list keyed, sorted and
 #   derived on its prefix: 0.04-0.1, gpu_thirty_seventh.sh, plus the layer shader's).
-# osnew: object space on glass, this tree against osnew (A B B A): a chunk marked once a
-#   pixel (69% fewer marking stores; predicted 0.1-0.14 ms a frame, gpu_thirty_seventh.sh)
-#   and its transparent samples in a branch of three quarters of a screen's rows (glass at
-#   1080p: 1,555,200 rows for 1,230,888 fragments in front, not 2,073,600; the joined list
-#   3.63M rows, not 4.15M; predicted 0.1-0.25 ms). Together 0.2-0.4 faster; the cold
-#   compile about 1.5x (a third copy of the frame's tail).
+# osnew: object space and TADS on glass, this tree against osnew (A B B A): a chunk marked once
+#   a pixel (69% fewer marking stores; predicted 0.1-0.14 ms a frame, gpu_thirty_seventh.sh);
+#   object space's transparent samples in a branch of three quarters of a screen's rows
+#   (glass at 1080p: 1,555,200 rows for 1,230,888 fragments in front, not 2,073,600: the
+#   joined list 3.63M rows, not 4.15M; predicted 0.1-0.25 ms); each tap's chunk and lane
+#   stored as one shadel index (taps_one_index.patch; the offline H100 program's taps fusion
+#   writes s32 and f32 [rows, 8], not s32, s32, pred and f32: 8 bytes a tap, not 13;
+#   predicted 0.05-0.1 ms, for TADS too). Together 0.25-0.45 ms faster for object space;
+#   its cold compile about 1.4x (launching instructions 832 -> 1085: a third copy of the
+#   frame's tail).
 # prof38: object space's and forward's 8-frame sequences on glass by scope (a still camera,
 #   state carried), each scope's longest kernels: where the frame's time goes inside a
 #   sequence, as the rows time it, after object space's taps change (not yet profiled).
@@ -39,7 +43,7 @@ for part in $(targets_first "$*"); do
   elif [ "$part" = fwdnew ]; then
     side_by_side fwdnew 120 "after fwdnew" --scenes glass --pipelines forward deferred
   elif [ "$part" = osnew ]; then
-    side_by_side osnew 100 "after osnew" --scenes glass --pipelines object_space
+    side_by_side osnew 110 "after osnew" --scenes glass --pipelines object_space tads
   elif [ "$part" = prof38 ]; then
     p() {  # p PIPELINE SCOPE...: its 8-frame sequence on glass, kernels by scope
       local pipe=$1
