@@ -3,8 +3,8 @@
 # `git archive 8be7c70 jaxrender` with patches of benchmarks/variants applied: fwdnew
 # draw_list_on_prefix and layer_texture_once, osnew mark_chunks_once_a_pixel,
 # os_transparent_rows_three_quarters and taps_one_index):
-#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh fwdnew osnew prof38
-# Device starts failed six times before it, so the variants run two by two, not one by one.
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh fwdnew osnew (then prof38 if time)
+# Device starts failed nine times before it, so the variants run two by two, not one by one.
 # fwdnew: forward and deferred on glass, this tree against fwdnew (A B B A). Deferred's change
 #   is the layer shader's alone: the texture filtered once for the radiance and the opacity
 #   (offline H100 program: 8 texture gathers in the layer shading, not 16). Predicted:
