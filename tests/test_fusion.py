@@ -15,7 +15,7 @@ from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.shading import load_lit_scene, shade
 from jaxrender.shading.vec import safe_normalize
 from jaxrender.types import SurfacePoints
-from tests.jaxpr_walk import sub_jaxprs
+from tests.jaxpr_walk import all_equations, sub_jaxprs
 
 SHORT = 4  # the longest axis the shader may reduce as adds; a reduce over one is a regression
 SHADOW_MAP = 32
@@ -231,3 +231,32 @@ def test_the_layer_shader_joins_channels_computed_apart():
 
     assert [origin(v) for v in last.invars] == ["optimization_barrier"] * 3, (
         [origin(v) for v in last.invars])
+
+
+def test_the_layer_shader_filters_the_texture_once():
+    """Its radiance and its opacity both read the points' filtered texture: looked up once and
+    stored, not once for each (XLA filtered it again in each of their fusions)."""
+    from jaxrender.pipelines.transparency import layer_shader
+    from jaxrender.shading import opacity, texture_sample
+
+    scene = load_lit_scene("room", effects={"shadow_map_size": SHADOW_MAP})
+    texels = scene.textures.atlas.size // 4  # the atlas's RGBA texels, read as rows
+    points = _room_points(16, 3)
+
+    def texture_reads(fn):
+        closed = jax.make_jaxpr(fn)(points)
+        return sum(eqn.primitive.name == "gather" and eqn.invars[0].aval.shape == (texels, 4)
+                   for eqn in all_equations(closed.jaxpr))
+
+    one_lookup = texture_reads(lambda p: texture_sample(p, scene))
+    assert one_lookup > 0, "the texture lookup reads no texel"
+    assert texture_reads(lambda p: opacity(p, scene)) == one_lookup
+    # The room's shader also reads its normal map from the atlas: the layer shader reads what
+    # shade() alone reads, and the opacity adds no lookup of its own.
+    assert texture_reads(layer_shader(scene, scene.camera)) == texture_reads(
+        lambda p: shade(p, scene)), "the layer shader filters the texture more than once"
+    values = layer_shader(scene, scene.camera)(points)
+    np.testing.assert_allclose(values[:, 3], opacity(points, scene), rtol=1e-6, atol=0,
+                               err_msg="the layer's opacity is not the shared opacity()")
+    np.testing.assert_allclose(values[:, :3], shade(points, scene), rtol=1e-6, atol=1e-7,
+                               err_msg="the layer's radiance is not the shared shade()")

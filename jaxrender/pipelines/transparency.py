@@ -41,13 +41,13 @@ import jax.numpy as jnp
 
 import jaxrender.pipelines.dispatch as dispatch
 from jaxrender.compaction import compact_indices
-from jaxrender.fusion import whole_rows
+from jaxrender.fusion import materialize, whole_rows
 from jaxrender.pipelines.base import BLENDING_DEFAULTS
 from jaxrender.pipelines.quads import segment_starts
 from jaxrender.pipelines.visibility import (clip_vertices, faces_where, is_transparent, points_at,
                                             raster_fragments)
 from jaxrender.scene.effects import BLEND_ADDITIVE, BLEND_OVER
-from jaxrender.shading import opacity, shade, view_depth
+from jaxrender.shading import opacity, shade, texture_sample, view_depth
 from jaxrender.sorting import lex_sort, on_prefix, prefix_sizes
 from jaxrender.types import Array
 
@@ -93,10 +93,13 @@ def refuse_transparency(scene, pipeline: str) -> None:
 def layer_shader(scene, camera):
     """points -> float32[N, 5]: the shared ``shade()`` radiance, the opacity, the view depth."""
     def fn(points):
+        # The texture looked up once and stored: the radiance and the opacity both read it,
+        # and XLA filtered it again in each of their fusions.
+        texel = materialize(texture_sample(points, scene)) if scene.effects.textures else None
         # Stored apart before they are joined: a fusion that writes all five channels runs
         # a thread per channel, each evaluating the lights; ``shade``'s three share one.
-        rgb, a, z = whole_rows((shade(points, scene), opacity(points, scene),
-                                view_depth(points, camera)))
+        rgb, a, z = whole_rows((shade(points, scene, texel=texel),
+                                opacity(points, scene, texel=texel), view_depth(points, camera)))
         return jnp.concatenate([rgb, a[:, None], z[:, None]], axis=-1)
 
     return fn

@@ -32,7 +32,17 @@ def _gather(x: Array, idx: Array) -> Array:
     return x[idx]
 
 
-def _base_colour(points: SurfacePoints, scene: Scene, effects: Effects) -> tuple[Array, Array]:
+def texture_sample(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -> Array:
+    """The filtered texture lookup float32[N, 4] of each point's material texture (any value
+    where the material has none): what ``shade`` and ``opacity`` read, for a caller that runs
+    both on the same points to hand them one lookup."""
+    effects = scene.effects if effects is None else effects
+    return sample(scene.textures, _gather(scene.materials.texture, points.material), points.uv,
+                  points.duv_dx, points.duv_dy, effects.aniso_taps)
+
+
+def _base_colour(points: SurfacePoints, scene: Scene, effects: Effects,
+                 texel: Array | None = None) -> tuple[Array, Array]:
     """Albedo [N, 3] and alpha [N] after textures and the procedural shader."""
     m = scene.materials
     mat = points.material
@@ -40,8 +50,7 @@ def _base_colour(points: SurfacePoints, scene: Scene, effects: Effects) -> tuple
     alpha = _gather(m.alpha, mat)
     if effects.textures:
         tid = _gather(m.texture, mat)
-        texel = sample(scene.textures, tid, points.uv, points.duv_dx, points.duv_dy,
-                       effects.aniso_taps)
+        texel = texture_sample(points, scene, effects) if texel is None else texel
         has = (tid >= 0)
         albedo = albedo * jnp.where(has[:, None], texel[:, :3], 1.0)
         alpha = alpha * jnp.where(has, texel[:, 3], 1.0)
@@ -70,17 +79,18 @@ def alpha(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
 
 
 @jax.named_scope("opacity")
-def opacity(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -> Array:
+def opacity(points: SurfacePoints, scene: Scene, effects: Effects | None = None,
+            texel: Array | None = None) -> Array:
     """Opacity float32[N] of blended materials: the material's opacity, times the filtered
-    texture alpha where its opacity_source is "texture_alpha"; 1 for opaque materials."""
+    texture alpha where its opacity_source is "texture_alpha"; 1 for opaque materials.
+    ``texel``: the points' ``texture_sample``, when the caller has it."""
     effects = scene.effects if effects is None else effects
     m = scene.materials
     a = _gather(m.opacity, points.material)
     if effects.textures:
         tid = _gather(m.texture, points.material)
         from_tex = _gather(m.opacity_texture, points.material) & (tid >= 0)
-        texel = sample(scene.textures, tid, points.uv, points.duv_dx, points.duv_dy,
-                       effects.aniso_taps)
+        texel = texture_sample(points, scene, effects) if texel is None else texel
         a = a * jnp.where(from_tex, texel[:, 3], 1.0)
     return a
 
@@ -234,16 +244,18 @@ def layer_sum(layer, angles: Array, lanes: int):
 
 
 @jax.named_scope("shade")
-def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -> Array:
+def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None,
+          texel: Array | None = None) -> Array:
     """Outgoing linear RGB radiance float32[N, 3] towards ``points.view``; 0 for invalid points.
 
     L = sum_lights f(l, v) E_l cos + albedo * ambient + emissive, f = albedo / pi + a specular
-    lobe per the material's BRDF kind. ``effects`` defaults to ``scene.effects``.
+    lobe per the material's BRDF kind. ``effects`` defaults to ``scene.effects``; ``texel``:
+    the points' ``texture_sample``, when the caller has it.
     """
     effects = scene.effects if effects is None else effects
     m = scene.materials
     mat = points.material
-    albedo, _ = _base_colour(points, scene, effects)
+    albedo, _ = _base_colour(points, scene, effects, texel)
     if effects.textures:
         # Stored: every light's lobe reads it, and a fused read would filter the texture again.
         albedo = materialize(albedo)
