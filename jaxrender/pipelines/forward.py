@@ -40,7 +40,7 @@ from jaxrender.pipelines.visibility import (clip_vertices, is_alpha_tested, poin
 from jaxrender.pipelines.waves import check_wave_size
 from jaxrender.raster.fragments import Fragments
 from jaxrender.shading import alpha_test, shade
-from jaxrender.sorting import EMPTY, lex_sort, lex_sort_prefix, on_prefix
+from jaxrender.sorting import EMPTY, lex_sort, on_prefix
 from jaxrender.types import Array, Frame
 
 INF = float("inf")
@@ -130,26 +130,34 @@ def single_sample_draw_list(fr, width: int, height: int, n_tris: int) -> DrawLis
     """The DrawList of one sample's fragment list, quad-major: sorted by (2x2 quad, triangle,
     lane), so that the units of one (triangle, quad) lie together and the quads are counted
     without a second sort (``quads.first_units_of_quads``). Its fragments are a prefix of the
-    list, so only that prefix is sorted (``lex_sort_prefix``)."""
+    list, so only that prefix is keyed, sorted and read (``on_prefix``): the fields past it are
+    those of empty entries."""
     n_pix, qw = width * height, (width + 1) // 2
     live = jnp.minimum(fr.count, fr.pixel.shape[0])
-    quad, lane = quad_keys(jnp.where(fr.valid, fr.pixel, 0), width)
     n_quads = qw * ((height + 1) // 2)
-    # (triangle, lane) as one key: one out-of-range code where two took a bit each, so that
-    # room's key fits 32 bits (a 32-bit pairs sort, half the radix passes of a 64-bit one).
-    keys = [jnp.where(fr.valid, k, -1) for k in (quad, fr.tri * 4 + lane)]
-    (quad, tri_lane), (depth,) = lex_sort_prefix(keys, (n_quads - 1, 4 * n_tris - 1),
-                                                 (fr.depth,), live)
-    valid = quad != EMPTY
-    tri = jnp.where(valid, tri_lane // 4, EMPTY)
-    quad, lane = jnp.where(valid, quad, 0), jnp.where(valid, tri_lane % 4, 0)
-    pixel = (2 * (quad // qw) + lane // 2) * width + 2 * (quad % qw) + lane % 2
-    skey = jnp.where(valid, 0, 1)
-    seg = segment_starts(skey, quad)
-    slot = jnp.where(valid, pixel, n_pix)
-    unit = jnp.arange(tri.shape[0], dtype=jnp.int32)
-    return DrawList(skey, pixel, tri, depth, valid, seg, slot, unit,
-                    fr.overflowed.astype(jnp.int32), fr.count, 1, lane)
+
+    def sort_prefix(part, _):
+        pixel, tri, depth, valid = part
+        quad, lane = quad_keys(jnp.where(valid, pixel, 0), width)
+        # (triangle, lane) as one key: one out-of-range code where two took a bit each, so
+        # that room's key fits 32 bits (a 32-bit pairs sort, half the radix passes of a
+        # 64-bit one).
+        keys = [jnp.where(valid, k, -1) for k in (quad, tri * 4 + lane)]
+        (quad, tri_lane), (depth,) = lex_sort(keys, (n_quads - 1, 4 * n_tris - 1), (depth,))
+        valid = quad != EMPTY
+        quad, lane = jnp.where(valid, quad, 0), jnp.where(valid, tri_lane % 4, 0)
+        pixel = (2 * (quad // qw) + lane // 2) * width + 2 * (quad % qw) + lane % 2
+        skey = jnp.where(valid, 0, 1)
+        return {"skey": skey, "pixel": pixel, "tri": jnp.where(valid, tri_lane // 4, EMPTY),
+                "depth": depth, "valid": valid, "seg": segment_starts(skey, quad),
+                "slot": jnp.where(valid, pixel, n_pix), "lane": lane}, None
+
+    empty = {"skey": 1, "pixel": 0, "tri": EMPTY, "depth": 0.0, "valid": False, "seg": False,
+             "slot": n_pix, "lane": 0}
+    d, _ = on_prefix(sort_prefix, live, (fr.pixel, fr.tri, fr.depth, fr.valid), fill=empty)
+    unit = jnp.arange(fr.pixel.shape[0], dtype=jnp.int32)
+    return DrawList(d["skey"], d["pixel"], d["tri"], d["depth"], d["valid"], d["seg"],
+                    d["slot"], unit, fr.overflowed.astype(jnp.int32), fr.count, 1, d["lane"])
 
 
 def pixel_exclusive_cummin(draw: DrawList, values: Array) -> Array:
