@@ -72,9 +72,7 @@ def alpha(points: SurfacePoints, scene: Scene, effects: Effects | None = None) -
     a = _gather(m.alpha, points.material)
     if effects.textures:
         tid = _gather(m.texture, points.material)
-        texel = sample(scene.textures, tid, points.uv, points.duv_dx, points.duv_dy,
-                       effects.aniso_taps)
-        a = a * jnp.where(tid >= 0, texel[:, 3], 1.0)
+        a = a * jnp.where(tid >= 0, texture_sample(points, scene, effects)[:, 3], 1.0)
     return a
 
 
