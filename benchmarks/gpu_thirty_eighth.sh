@@ -4,8 +4,8 @@
 # draw_list_on_prefix and layer_texture_once, osnew mark_chunks_once_a_pixel,
 # os_transparent_rows_three_quarters and taps_one_index):
 #   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_eighth.sh fwdnew osnew (then prof38 if time)
-# Device starts failed or were refused fourteen times before it, so the variants run two by
-# two, not one by one. It ran on an H200 (RESULTS.md, thirty-eighth session): fwdnew adopted
+# Eighteen calls got no machine before it (twelve failed starts, six refusals), so the
+# variants run in two groups, not one by one. It ran on an H200 (RESULTS.md, thirty-eighth session): fwdnew adopted
 # (0edb623, 394d780; its patches then removed), osnew not (its three patches stay).
 # fwdnew: forward and deferred on glass, this tree against fwdnew (A B B A). Deferred's change
 #   is the layer shader's alone: the texture filtered once for the radiance and the opacity
