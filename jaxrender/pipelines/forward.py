@@ -155,9 +155,8 @@ def single_sample_draw_list(fr, width: int, height: int, n_tris: int) -> DrawLis
     empty = {"skey": 1, "pixel": 0, "tri": EMPTY, "depth": 0.0, "valid": False, "seg": False,
              "slot": n_pix, "lane": 0}
     d, _ = on_prefix(sort_prefix, live, (fr.pixel, fr.tri, fr.depth, fr.valid), fill=empty)
-    unit = jnp.arange(fr.pixel.shape[0], dtype=jnp.int32)
-    return DrawList(d["skey"], d["pixel"], d["tri"], d["depth"], d["valid"], d["seg"],
-                    d["slot"], unit, fr.overflowed.astype(jnp.int32), fr.count, 1, d["lane"])
+    return DrawList(**d, unit=jnp.arange(fr.pixel.shape[0], dtype=jnp.int32),
+                    overflow=fr.overflowed.astype(jnp.int32), fragments=fr.count, samples=1)
 
 
 def pixel_exclusive_cummin(draw: DrawList, values: Array) -> Array:
