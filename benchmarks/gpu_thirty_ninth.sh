@@ -2,12 +2,18 @@
 # Thirty-ninth session. Call 1 (carry [".whl", ".v/taps1", ".v/rows34"]; each .v tree is
 # `git archive 149b213 jaxrender` with one patch of benchmarks/variants applied: taps1
 # taps_one_index, rows34 os_transparent_rows_three_quarters):
-#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_ninth.sh osparts prof38
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_ninth.sh osparts graphs prof38
 # osparts: object space on glass, this tree against taps1 and rows34 (A B C C B A). The
 #   thirty-eighth session timed them together with the once-a-pixel marking (osnew: 0.46 ms a
 #   frame slower); the offline program blamed the marking. Predicted: taps1 0.03-0.1 ms faster
 #   (8 bytes a tap stored and read twice, not 13: ~200 MB less traffic on glass), rows34
 #   0.05-0.2 faster (3.63M joined rows, not 4.15M).
+# graphs: forward and object space on glass with XLA's default command buffers and with loops
+#   and conditionals in them too (--xla_gpu_enable_command_buffer=...,CONDITIONAL,WHILE: their
+#   predicates stay on the device), A B B A. Last tried in the twelfth session (glass 0.93-0.99x,
+#   DACS and the visibility buffer up to 1.22x); since then the frames hold far fewer kernels
+#   (forward glass 6.56 -> 3.36 ms) and still test 14-16 predicates a frame (round_trips.py, CPU
+#   count), about 50 us of idle device each (fifteenth session). Predicted 0.9-1.0x.
 # prof38: as gpu_thirty_eighth.sh's (object space's and forward's 8-frame sequences on glass
 #   by scope).
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
@@ -18,6 +24,15 @@ S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outp
 for part in $(targets_first "$*"); do
   if [ "$part" = osparts ]; then
     side_by_side osparts 110 "after taps1 rows34" --scenes glass --pipelines object_space
+  elif [ "$part" = graphs ]; then
+    G=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE
+    for cfg in default graphs graphs default; do
+      flags=""
+      [ "$cfg" = graphs ] && flags="--xla_gpu_enable_command_buffer=$G"
+      XLA_FLAGS="$flags" PYTHONPATH=$PWD:/tmp/site timeout -k 5 140 $S --scenes glass \
+        --pipelines forward object_space 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
+        | grep '^|' | sed "s/^/$cfg: /" | tee -a "$OUT/graphs.md"
+    done
   elif [ "$part" = prof38 ] || [ "$part" = ten1 ] || [ "$part" = ten2 ] \
     || [ "$part" = targets ]; then
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_eighth.sh "$part"
