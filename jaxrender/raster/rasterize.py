@@ -276,28 +276,36 @@ def traverse(clip, faces, width, height, cull, offset, capacity, clip_cap, state
         # From a materialised copy, as dropped_nonfinite below (12 us at 1080p, 2.5k triangles).
         n_cross = jnp.sum(jax.lax.optimization_barrier(crossing), dtype=jnp.int64)
 
-    def clip_chunk(k, carry):
-        st, items = carry
+    def clip_fans(k):
+        """The fans of the crossing triangles of rank k*clip_cap ... (k+1)*clip_cap-1."""
         with jax.named_scope("clip"):
-            # The crossing triangles of rank k*clip_cap ... (k+1)*clip_cap-1. Listed here, in
-            # the loop, so that a frame without crossings pays nothing for the list.
             idx, _ = compact_indices(crossing, clip_cap, start=k * clip_cap)
             live = jnp.arange(clip_cap) < n_cross - k * clip_cap
             fan, fan_ok = clip_triangles(source.gather(idx)[0], guard)
             fan_ok = (fan_ok & live[:, None]).reshape(-1)
             n_fan = fan_ok.shape[0]
-            fans = Triangles(fan.reshape(-1, 4), jnp.arange(3 * n_fan, dtype=jnp.int32)
+            return Triangles(fan.reshape(-1, 4), jnp.arange(3 * n_fan, dtype=jnp.int32)
                              .reshape(n_fan, 3), fan_ok, jnp.repeat(idx, MAX_FAN))
+
+    def clip_chunk(k, carry):
+        st, items = carry
         with jax.named_scope("coverage"):
-            st, n = for_each_chunk(fans, setup, capacity, offset, st, fn, traversal, peel)
+            st, n = for_each_chunk(clip_fans(k), setup, capacity, offset, st, fn, traversal,
+                                   peel)
         return st, items + n
 
-    # The clip chunks run as the coverage loop's ``then``: on the GPU, in the same loop.
-    n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
+    # The first clip chunk's fans follow the unclipped triangles in one list, so a frame whose
+    # items fit one chunk runs no loop step (on a GPU each step and each loop's last test wait
+    # for the host); further clip chunks, possible only when the chunk holds fewer than all
+    # triangles, run as the coverage loop's ``then``.
+    joined = dataclasses.replace(source, ok=inside).joined(clip_fans(0))
+    then = None
+    if clip_cap < n_tris:
+        n_clip_chunks = (n_cross + clip_cap - 1) // clip_cap
+        then = (jnp.maximum(n_clip_chunks - 1, 0), lambda k, carry: clip_chunk(k + 1, carry))
     with jax.named_scope("coverage"):
-        state, items = for_each_chunk(dataclasses.replace(source, ok=inside), setup, capacity,
-                                      offset, state, fn, traversal, peel,
-                                      then=(n_clip_chunks, clip_chunk))
+        state, items = for_each_chunk(joined, setup, capacity, offset, state, fn, traversal,
+                                      peel, then=then)
     counts = {
         "work_items": items,
         "clipped": n_cross,

@@ -35,6 +35,13 @@ class Triangles:
         safe = jnp.asarray(SAFE_VERTEX, tc.dtype)
         return jnp.where(ok[:, None, None], tc, safe), ok, pick(self.tri)
 
+    def joined(self, more: "Triangles") -> "Triangles":
+        """This list's slots followed by ``more``'s, in one list."""
+        index = jnp.concatenate([self.index, more.index + self.verts.shape[0]])
+        return Triangles(jnp.concatenate([self.verts, more.verts]), index,
+                         jnp.concatenate([self.ok, more.ok]),
+                         jnp.concatenate([self.tri, more.tri]))
+
 
 @pytree_dataclass
 class WorkChunk:

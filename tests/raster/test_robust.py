@@ -234,3 +234,35 @@ def test_bad_input_gives_a_clear_error(kwargs, error, match):
         rasterize_clip(
             args.pop("clip"), args.pop("faces"), args.pop("width"), args.pop("height"), **args
         )
+
+
+@pytest.mark.parametrize("clip_capacity", [None, 4])
+def test_the_gpu_traversal_reads_one_condition_when_every_item_fits_one_chunk(rng,
+                                                                              clip_capacity):
+    """Triangles crossing the near plane are clipped before the coverage loop and their fans
+    join the unclipped triangles' list: with every item in the peeled chunk, the GPU program
+    tests one loop condition (each test waits for the host). Clip chunks beyond the first,
+    possible only when a chunk holds fewer than all triangles, run as further loop steps:
+    each step reads its condition and its branch, and covers its fans in a peeled chunk and
+    a loop tested once."""
+    from jaxrender.bench import round_trips
+    from jaxrender.raster.rasterize import rasterize_traced
+    from jaxrender.raster.setup import SUBPIXEL_BITS
+
+    p = rng.uniform(-3, 3, (90, 3))
+    p[:, 2] = rng.uniform(-6, 2, 90)  # z > 0 is behind the eye
+    clip, faces = pad(gl_clip(p, aspect=W / H), np.arange(90).reshape(-1, 3).astype(np.int32))
+    n_tris = faces.shape[0]
+    cap = clip_capacity or n_tris
+
+    def draw(c):
+        return rasterize_traced(c, jnp.asarray(faces), width=W, height=H, cull_backfaces=False,
+                                offsets=((1 << SUBPIXEL_BITS) // 2,) * 2, work_capacity=1 << 16,
+                                clip_capacity=cap, traversal="gpu")
+
+    vis = draw(jnp.asarray(clip))
+    crossing = int(vis.counts["clipped"])
+    assert crossing > 2 * cap or clip_capacity is None, f"only {crossing} triangles crossing"
+    extra_chunks = -(-crossing // cap) - 1
+    reads = round_trips.count(draw, jnp.asarray(clip)).per_frame()[None]
+    assert reads == 1 + 3 * extra_chunks, (reads, crossing, cap)
