@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Thirty-ninth session. Call 1 (carry [".whl", ".v/taps1", ".v/rows34"]; each .v tree is
-# `git archive 149b213 jaxrender` with one patch of benchmarks/variants applied: taps1
-# taps_one_index, rows34 os_transparent_rows_three_quarters):
-#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_ninth.sh osparts graphs prof38
+# Thirty-ninth session. Call 1 (carry [".whl", ".v/b39", ".v/taps1", ".v/rows34"]; .v/b39 is
+# `git archive 149b213 jaxrender`, the others `git archive f40e951 jaxrender` with one patch of
+# benchmarks/variants applied: taps1 taps_one_index, rows34 os_transparent_rows_three_quarters):
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_ninth.sh clipjoin osparts graphs prof38
+# clipjoin: forward and deferred on glass, this tree against b39 (A B B A): the first clip
+#   chunk's fans joined to the coverage list (f40e951) take 3 host reads a frame out of each
+#   (CPU count: forward 15 -> 12, deferred 10 -> 7). Predicted 0.08-0.15 ms a frame faster
+#   (27-50 us a read, fifteenth and sixteenth sessions).
 # osparts: object space on glass, this tree against taps1 and rows34 (A B C C B A). The
 #   thirty-eighth session timed them together with the once-a-pixel marking (osnew: 0.46 ms a
 #   frame slower); the offline program blamed the marking. Predicted: taps1 0.03-0.1 ms faster
@@ -22,7 +26,9 @@ export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_
   JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
 S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 for part in $(targets_first "$*"); do
-  if [ "$part" = osparts ]; then
+  if [ "$part" = clipjoin ]; then
+    side_by_side clipjoin 120 "b39 after" --scenes glass --pipelines forward deferred
+  elif [ "$part" = osparts ]; then
     side_by_side osparts 110 "after taps1 rows34" --scenes glass --pipelines object_space
   elif [ "$part" = graphs ]; then
     G=FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE
