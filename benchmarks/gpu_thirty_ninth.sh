@@ -18,6 +18,12 @@
 #   DACS and the visibility buffer up to 1.22x); since then the frames hold far fewer kernels
 #   (forward glass 6.56 -> 3.36 ms) and still test 14-16 predicates a frame (round_trips.py, CPU
 #   count), about 50 us of idle device each (fifteenth session). Predicted 0.9-1.0x.
+# fswitch (carry .v/fsw: this tree with benchmarks/variants/forward_shade_switch.patch):
+#   forward on glass and room, this tree against fsw (A B B A): forward's opaque units
+#   launched in one switch over power-of-two chunk counts, not in blocks (glass 8 chunks: 4
+#   host reads -> 1, and since the thirty-seventh session's split its units fill the chunks:
+#   glass about 2.0M units in 2,097,152 lanes, room 2,085,405). Predicted 0.05-0.15 ms a frame
+#   faster on both; cold compile longer (six shader copies, not two).
 # prof38: as gpu_thirty_eighth.sh's (object space's and forward's 8-frame sequences on glass
 #   by scope).
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
@@ -39,6 +45,8 @@ for part in $(targets_first "$*"); do
         --pipelines forward object_space 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
         | grep '^|' | sed "s/^/$cfg: /" | tee -a "$OUT/graphs.md"
     done
+  elif [ "$part" = fswitch ]; then
+    side_by_side fswitch 150 "after fsw" --scenes glass room --pipelines forward
   elif [ "$part" = prof38 ] || [ "$part" = ten1 ] || [ "$part" = ten2 ] \
     || [ "$part" = targets ]; then
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_eighth.sh "$part"
