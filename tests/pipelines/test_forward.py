@@ -1,6 +1,7 @@
 """Forward shading: hand-worked invocation and helper-lane counts, pre-pass, foliage overdraw."""
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from fdv_scenes import FOLIAGE_CARDS, H, W, foliage_scene, make_scene, rect_part, tri_part
@@ -100,7 +101,7 @@ def test_config_rejects_bad_values():
 def test_the_single_sample_draw_list_is_quad_major_and_in_draw_order(filled):
     # One sample sorts only the filled prefix of its list, by (2x2 quad, triangle, lane); the
     # oracle is NumPy's lexsort of the same fragments.
-    from jaxrender.pipelines.forward import single_sample_draw_list
+    from jaxrender.pipelines.forward_draw import single_sample_draw_list
     from jaxrender.raster.fragments import Fragments
 
     rng = np.random.default_rng(int(filled * 100))
@@ -130,11 +131,51 @@ def test_the_single_sample_draw_list_is_quad_major_and_in_draw_order(filled):
     np.testing.assert_array_equal(np.asarray(got.seg)[:n], starts, err_msg="seg")
 
 
+@pytest.mark.parametrize("z_prepass", [False, True])
+def test_sorting_and_replaying_in_one_branch_equals_the_two_steps(z_prepass):
+    # Without an alpha test nothing runs between the draw list's sort and its depth test, so
+    # both run in one branch of the filled prefix: the same draw list and plan as the two
+    # steps, on fresh random fragments (a pixel's fragments of many triangles, so that the
+    # depth test rejects some), with one host read where the two steps take two.
+    from jaxrender.bench import round_trips
+    from jaxrender.pipelines.forward_draw import (replay, single_sample_draw_list,
+                                                  sorted_and_replayed)
+    from jaxrender.raster.fragments import Fragments
+
+    rng = np.random.default_rng(11 + z_prepass)
+    cap, w, h, n_tris, n = 3000, 21, 17, 40, 1700
+    pairs = rng.choice(w * h * n_tris, n, replace=False)
+    valid = np.arange(cap) < n
+    pixel, tri = np.zeros(cap, np.int32), np.full(cap, -1, np.int32)
+    pixel[:n], tri[:n] = pairs // n_tris, pairs % n_tris
+    depth = np.where(valid, rng.random(cap), 1.0).astype(np.float32)
+    fr = Fragments(*(jnp.asarray(a) for a in (pixel, tri, depth, valid)), jnp.int32(n))
+    cfg = make_config("forward", width=w, height=h, z_prepass=z_prepass)
+
+    def two_steps(f):
+        draw = single_sample_draw_list(f, w, h, n_tris)
+        return draw, replay(draw, draw.valid, 1, cfg)
+
+    def one_branch(f):
+        return sorted_and_replayed(f, n_tris, cfg)
+
+    want, got = two_steps(fr), one_branch(fr)
+    paths, want_leaves = zip(*jax.tree_util.tree_flatten_with_path(want)[0])
+    got_leaves = jax.tree.leaves(got)
+    assert len(got_leaves) == len(want_leaves), "the two results differ in structure"
+    for path, a, b in zip(paths, want_leaves, got_leaves):
+        np.testing.assert_array_equal(np.asarray(b), np.asarray(a),
+                                      err_msg=jax.tree_util.keystr(path))
+    assert 0 < int(jnp.sum(got[1][0])) < n, "the depth test rejected nothing or everything"
+    reads = [round_trips.count(f, fr).per_frame()[None] for f in (two_steps, one_branch)]
+    assert reads == [2, 1], f"host reads (two steps, one branch): {reads}"
+
+
 def test_a_room_sized_quad_list_sorts_a_32_bit_key_on_a_gpu():
     # (quad, triangle, lane) at 1920x1080 with room's 1056 triangles: 19 + 13 bits with the
     # triangle and lane in one key (one out-of-range code), 33 as three keys; the GPU branch of
     # lex_sort then sorts uint32 keys beside the index instead of uint64 ones.
-    from jaxrender.pipelines.forward import single_sample_draw_list
+    from jaxrender.pipelines.forward_draw import single_sample_draw_list
     from jaxrender.raster.fragments import Fragments
 
     cap = 1 << 16
