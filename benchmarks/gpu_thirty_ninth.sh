@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# Thirty-ninth session. Call 1 (carry [".whl", ".v/b39", ".v/taps1", ".v/rows34"]; .v/b39 is
-# `git archive 149b213 jaxrender`, the others `git archive f40e951 jaxrender` with one patch of
+# Thirty-ninth session. Call 1 (carry [".whl", ".v/b39", ".v/taps1", ".v/rows34", ".v/fsw"]; .v/b39 is
+# `git archive 149b213 jaxrender`, the others `git archive 61f08a5 jaxrender` with one patch of
 # benchmarks/variants applied: taps1 taps_one_index, rows34 os_transparent_rows_three_quarters):
 #   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_ninth.sh clipjoin osparts graphs prof38
 # clipjoin: forward and deferred on glass, this tree against b39 (A B B A): the first clip
-#   chunk's fans joined to the coverage list (f40e951) take 3 host reads a frame out of each
-#   (CPU count: forward 15 -> 12, deferred 10 -> 7). Predicted 0.08-0.15 ms a frame faster
-#   (27-50 us a read, fifteenth and sixteenth sessions).
+#   chunk's fans joined to the coverage list (f40e951) take 3 host reads a frame out of each,
+#   and forward's sort and replay in one branch (61f08a5) one more (CPU count: forward
+#   15 -> 11, deferred 10 -> 7). Predicted 0.08-0.2 ms a frame faster (27-50 us a read,
+#   fifteenth and sixteenth sessions).
 # osparts: object space on glass, this tree against taps1 and rows34 (A B C C B A). The
 #   thirty-eighth session timed them together with the once-a-pixel marking (osnew: 0.46 ms a
 #   frame slower); the offline program blamed the marking. Predicted: taps1 0.03-0.1 ms faster
