@@ -48,9 +48,10 @@ class Blended(NamedTuple):
 def over_transparent_samples(scene, sheet, camera, cfg, vis, fp: Footprint, tail):
     """``tail(the samples' footprints, Blended or None)``: for a scene without transparency,
     of the pixels' footprints ``fp``; else of those joined by the transparent fragments in
-    front, compacted into a list of one entry per pixel, or of the fragment list's length when
-    more are in front (one ``lax.switch``: every per-sample pass after this, the marking, the
-    allocation, the final reads, costs what the list holds, not the fragment capacity)."""
+    front, compacted into a list of three quarters of a screen's entries, of a screen's, or of
+    the fragment list's length, the shortest that holds them (one ``lax.switch``: every
+    per-sample pass after this, the marking, the allocation, the final reads, costs what the
+    list holds, not the fragment capacity)."""
     check_settings(scene, cfg)
     if not scene.effects.transparency:
         return tail(fp, None)
@@ -59,7 +60,10 @@ def over_transparent_samples(scene, sheet, camera, cfg, vis, fp: Footprint, tail
         clip = clip_vertices(scene, camera, cfg)
         fr = transparent_fragments(scene, clip, cfg)
         _, work = front_work(fr, vis.depth.reshape(-1), w * h)
-    sizes = sorted({min(w * h, fr.pixel.shape[0]), fr.pixel.shape[0]})
+    # Every branch holds the rest of the frame (compile time): three sizes, so that layers in
+    # front of over half the screen (glass) need not run a whole screen's rows.
+    sizes = sorted({min(m, fr.pixel.shape[0]) for m in (3 * w * h // 4, w * h)}
+                   | {fr.pixel.shape[0]})
 
     def with_samples(size: int):
         def branch(_):
