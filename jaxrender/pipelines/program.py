@@ -135,6 +135,35 @@ def _program(pipe, static_cfg, mode, outputs, scene, static, cameras, traced, st
 
 _program_jit = jax.jit(_program, static_argnums=(0, 1, 2, 3))
 
+# On a GPU XLA reads every loop condition and branch index back to the host before it goes on,
+# unless its CUDA graphs hold the loops and branches too (conditional nodes): these pipelines
+# run faster so and the others were slower so (RESULTS.md, thirty-ninth and twelfth sessions).
+# Other platforms ignore the option.
+DEVICE_CONTROL_FLOW = ("forward", "object_space")
+GRAPH_COMMANDS = "FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE"
+_program_graphs_jit = jax.jit(_program, static_argnums=(0, 1, 2, 3),
+                              compiler_options={"xla_gpu_enable_command_buffer": GRAPH_COMMANDS})
+
+
+def program_jit(pipe):
+    """The jitted program of ``pipe``: with its control flow in CUDA graphs for the pipelines of
+    ``DEVICE_CONTROL_FLOW``."""
+    return _program_graphs_jit if pipe.name in DEVICE_CONTROL_FLOW else _program_jit
+
+
+def _run_program(pipe, fixed, args):
+    """``pipe``'s program called on ``args``; inside another program's trace (jax takes
+    compiler options on a top-level jit only) the plain one, under the outer program's
+    options."""
+    if _is_traced(*args):
+        return _program_jit(*fixed, *args)
+    try:
+        return program_jit(pipe)(*fixed, *args)
+    except ValueError as e:  # called inside a trace on closed-over, concrete arguments
+        if "can only be passed to top-level" not in str(e):
+            raise
+        return _program_jit(*fixed, *args)
+
 
 def unjitted(fixed) -> Callable:
     """The program of ``arguments``' static arguments, as a plain function of its dynamic
@@ -144,13 +173,14 @@ def unjitted(fixed) -> Callable:
 
 def cache_size() -> int:
     """Programs compiled so far in this process (tests: a camera move must not add one)."""
-    return _program_jit._cache_size()
+    return _program_jit._cache_size() + _program_graphs_jit._cache_size()
 
 
 def clear_cache() -> None:
     """Drop every compiled program of this process (each holds host memory maps; a process
     that compiles many configs, like the parameter audit, runs out of them)."""
     _program_jit.clear_cache()
+    _program_graphs_jit.clear_cache()
 
 
 # ---------------------------------------------------------------- arguments and checks
@@ -235,7 +265,7 @@ def render(pipe, scene, camera, cfg, *, t=0) -> Frame:
     """Frame ``t`` of ``pipe`` (the scene posed at ``t``; with TAA, its jitter phase) from its
     initial state, overflow-checked. ``t`` is traced: another frame does not recompile."""
     fixed, args, _ = _arguments(pipe, scene, camera, cfg, False, 0, t)
-    frame = _program_jit(*fixed, *args)
+    frame = _run_program(pipe, fixed, args)
     return frame if _is_traced(scene, camera, t) else check_overflow(pipe, cfg, frame)
 
 
@@ -243,7 +273,7 @@ def render_sequence(pipe, scene, cameras, cfg, *, warmup_frames: int = 0, start=
     """Frames ``start``, ``start + 1``, ... of a camera path through ``pipe``'s steps, state
     carried, warm-up dropped."""
     fixed, args, _ = _arguments(pipe, scene, cameras, cfg, True, warmup_frames, start)
-    frames = _program_jit(*fixed, *args)
+    frames = _run_program(pipe, fixed, args)
     return frames if _is_traced(*args) else check_overflow(pipe, cfg, frames)
 
 
@@ -257,7 +287,7 @@ def arguments(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frame
 
 def lower_arguments(fixed, args):
     """The jax Lowered program of ``arguments``' static and dynamic arguments."""
-    return _program_jit.lower(*fixed, *args)
+    return program_jit(fixed[0]).lower(*fixed, *args)
 
 
 def lower(pipe, scene, cameras, cfg, *, sequence: bool = False, warmup_frames: int = 0,
