@@ -25,6 +25,12 @@
 #   host reads -> 1, and since the thirty-seventh session's split its units fill the chunks:
 #   glass about 2.0M units in 2,097,152 lanes, room 2,085,405). Predicted 0.05-0.15 ms a frame
 #   faster on both; cold compile longer (six shader copies, not two).
+# Call 1 ran on an H100 (RESULTS.md, thirty-ninth session); rows34 and graphs (for forward and
+# object space) adopted. Call 2 (carry [".whl", ".v/fsw"], .v/fsw at 08c5d91 with the patch):
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_ninth.sh final39 fswitch
+# final39: forward and object space on glass and room in this tree (8-frame pans, images
+#   only): the rows over 3 ms before this session (H200: forward 3.36, object space 3.58 on
+#   glass). Predicted on an H100: forward glass 3.45-3.55, object space glass 3.85-3.95.
 # prof38: as gpu_thirty_eighth.sh's (object space's and forward's 8-frame sequences on glass
 #   by scope).
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
@@ -46,8 +52,12 @@ for part in $(targets_first "$*"); do
         --pipelines forward object_space 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
         | grep '^|' | sed "s/^/$cfg: /" | tee -a "$OUT/graphs.md"
     done
+  elif [ "$part" = final39 ]; then
+    nvidia-smi --query-gpu=name --format=csv,noheader | tee -a "$OUT/final39.md"
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 $S --scenes glass room --pipelines forward \
+      object_space --json "$OUT/final39.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/final39.md"
   elif [ "$part" = fswitch ]; then
-    side_by_side fswitch 150 "after fsw" --scenes glass room --pipelines forward
+    side_by_side fswitch 150 "after fsw" --scenes ${FSWITCH_SCENES:-glass room} --pipelines forward
   elif [ "$part" = prof38 ] || [ "$part" = ten1 ] || [ "$part" = ten2 ] \
     || [ "$part" = targets ]; then
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_eighth.sh "$part"
