@@ -53,12 +53,11 @@ def kernel_events(xplane_path: str) -> list[tuple[str, float, float]]:
     return out
 
 
-def hlo_sources(fn, *args) -> dict[str, str]:
+def hlo_sources(text: str) -> dict[str, str]:
     """Instruction name (dots as underscores, as kernels are named) -> 'scope @ file:line' of
-    the JAX operation it came from, read off the optimized HLO's metadata."""
+    the JAX operation it came from, read off the optimized HLO text's metadata."""
     import re
 
-    text = fn.lower(*args).compile().as_text()
     pat = re.compile(r'^\s*(?:ROOT )?%?([\w.\-]+) = .*?metadata=\{op_name="([^"]*)"'
                      r'(?: source_file="([^"]*)")?(?: source_line=(\d+))?')
     out = {}
@@ -85,11 +84,14 @@ def short_source(source: str, keep: int = 60) -> str:
 
 
 def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
-                 scopes: tuple[str, ...] = (), copies: bool = False, scope_top: int = 0) -> dict:
+                 scopes: tuple[str, ...] = (), copies: bool = False, scope_top: int = 0,
+                 hlo_text: str | None = None) -> dict:
     """Trace ``calls`` steady-state calls of ``fn(*args)`` and print the kernel table; with
     ``scopes``, also the kernel time whose source lies under each named scope, and that
-    scope's ``scope_top`` longest kernels."""
-    fn = jax.jit(fn)
+    scope's ``scope_top`` longest kernels. ``fn`` is jitted here unless ``hlo_text`` (its
+    compiled program's text) says it is compiled already."""
+    if hlo_text is None:
+        fn = jax.jit(fn)
     jax.block_until_ready(fn(*args))  # compile and warm up outside the trace
     jax.block_until_ready(fn(*args))
     t0 = time.perf_counter()
@@ -113,7 +115,8 @@ def profile_call(fn, *args, calls: int = 5, top: int = 15, label: str = "",
           f"{len(events) / calls:.0f} launches/call, device span {span_ms:.3f} ms/call "
           f"(first kernel start to last kernel end; span - kernels = device idle)")
     try:
-        sources = hlo_sources(fn, *args)
+        sources = hlo_sources(hlo_text if hlo_text is not None
+                              else fn.lower(*args).compile().as_text())
     except Exception as e:  # noqa: BLE001 - the table is still useful without sources
         sources = {}
         print(f"(no HLO sources: {type(e).__name__}: {e})")
@@ -230,30 +233,29 @@ def main(argv=None) -> int:
     sc, cam, pipe, cfg, label = pipeline_case(args.what, args.scene, w, h, args.set,
                                               args.shader_cost)
     scopes = tuple(args.scope)
+    cameras = cam
     if args.frames:
         from jaxrender.scene.camera_path import stack
 
-        path = stack([cam] * args.frames)
-        profile_call(lambda s, c: pipe.render_sequence(s, c, cfg).image, sc, path,
-                     calls=args.calls, top=args.top, scopes=scopes, scope_top=args.scope_top,
-                     label=f"{label} sequence of {args.frames} frames")
-        return 0
-    if pipe.prepares:  # object_space: charts built on the host, outside
-        import jax.numpy as jnp
-
-        static = pipe.prepare(sc, cfg)
-
-        def one_frame(s, c, st):  # what pipe.render compiles: one step from the initial state
-            frame, _ = pipe.step(s, st, pipe.init(s, st, c, cfg), c, jnp.int32(0), cfg)
-            return frame
-
-        profile_call(one_frame, sc, cam, static, calls=args.calls, top=args.top, label=label,
-                     scopes=scopes, scope_top=args.scope_top, copies=args.copies)
-        return 0
-    profile_call(lambda s, c: pipe.render(s, c, cfg), sc, cam, calls=args.calls, top=args.top,
-                 label=label, scopes=scopes, scope_top=args.scope_top, copies=args.copies)
+        cameras, label = stack([cam] * args.frames), f"{label} sequence of {args.frames} frames"
+    # The program as the benchmarks compile it (its own compiler options, host-side
+    # preparation outside), returning the images alone as a timed run does.
+    run, text = pipeline_program(pipe, sc, cameras, cfg, sequence=bool(args.frames))
+    profile_call(run, calls=args.calls, top=args.top, label=label, scopes=scopes,
+                 scope_top=args.scope_top, copies=args.copies, hlo_text=text)
     return 0
 
+
+def pipeline_program(pipe, scene, cameras, cfg, sequence: bool):
+    """(``run() -> image``, its compiled program's text): the program of ``pipe`` compiled as
+    ``program.compile`` does, images only."""
+    from jaxrender.pipelines import program
+
+    lowered, prepared = program.lower(pipe, scene, cameras, cfg, sequence=sequence,
+                                      outputs="images")
+    compiled = lowered.compile()
+    call = program.bind(pipe, cfg, compiled, prepared)
+    return (lambda: call(scene, cameras).image), compiled.as_text()
 
 if __name__ == "__main__":
     raise SystemExit(main())
