@@ -31,6 +31,9 @@
 # final39: forward and object space on glass and room in this tree (8-frame pans, images
 #   only): the rows over 3 ms before this session (H200: forward 3.36, object space 3.58 on
 #   glass). Predicted on an H100: forward glass 3.45-3.55, object space glass 3.85-3.95.
+# Call 3 (carry [".whl"]): NO_AUTO_TARGETS=1 bash benchmarks/gpu_thirty_ninth.sh osprof39
+# osprof39: object space's 8-frame sequence on glass by scope (prof38's failed: the profiler
+#   traced the sequence inside another jit, where the sheet cannot be built).
 # prof38: as gpu_thirty_eighth.sh's (object space's and forward's 8-frame sequences on glass
 #   by scope).
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
@@ -56,6 +59,12 @@ for part in $(targets_first "$*"); do
     nvidia-smi --query-gpu=name --format=csv,noheader | tee -a "$OUT/final39.md"
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 $S --scenes glass room --pipelines forward \
       object_space --json "$OUT/final39.json" 2>&1 | quiet | grep '^|' | tee -a "$OUT/final39.md"
+  elif [ "$part" = osprof39 ]; then
+    PYTHONPATH=$PWD:/tmp/site timeout -k 5 140 python3 benchmarks/profile_kernels.py \
+      object_space --scene glass --frames 8 --top 40 --calls 3 --scope-top 8 \
+      $(printf -- '--scope %s ' mark_allocate reuse visibility shade resolve \
+        transparent_marking transparent_resolve transparent sorted_blend) 2>&1 | quiet \
+      | tee -a "$OUT/osprof39.md"
   elif [ "$part" = fswitch ]; then
     side_by_side fswitch 150 "after fsw" --scenes ${FSWITCH_SCENES:-glass room} --pipelines forward
   elif [ "$part" = prof38 ] || [ "$part" = ten1 ] || [ "$part" = ten2 ] \
