@@ -19,6 +19,8 @@ from jaxrender.fusion import sum_small
 from jaxrender.pipelines.os_sheet import CHUNK, LANES, ShadeSheet
 from jaxrender.types import Array
 
+CHUNK_BITS = CHUNK.bit_length() - 1  # CHUNK is a power of two
+
 FRACTION = 256.0  # 8-bit LOD and bilinear fractions
 
 
@@ -97,7 +99,7 @@ def taps(fp: Footprint, sheet: ShadeSheet, bias: Array, mode: str, aniso_taps: i
     for lv, wl in levels:
         rl = jnp.right_shift(res, lv)
         rlf = rl.astype(jnp.float32)
-        cps = rl // CHUNK
+        cps = rl >> CHUNK_BITS
         base = sheet.obj_base[fp.obj, lv]
         for i in range(n):
             off = (i + 0.5) / n - 0.5
@@ -111,8 +113,10 @@ def taps(fp: Footprint, sheet: ShadeSheet, bias: Array, mode: str, aniso_taps: i
                 for dx, wx in ((0, 1.0 - fx), (1, fx)):
                     x = jnp.clip(x0f + dx, 0.0, hi).astype(jnp.int32)
                     y = jnp.clip(y0f + dy, 0.0, hi).astype(jnp.int32)
-                    chunks.append(base + (y // CHUNK) * cps + x // CHUNK)
-                    lanes.append((y % CHUNK) * CHUNK + x % CHUNK)
+                    # Shifts and masks are floor division and modulo by a power of two, without
+                    # the sign corrections jnp's // and % add to each of a row's taps.
+                    chunks.append(base + (y >> CHUNK_BITS) * cps + (x >> CHUNK_BITS))
+                    lanes.append(((y & (CHUNK - 1)) << CHUNK_BITS) + (x & (CHUNK - 1)))
                     weights.append(wl * wx * wy / n)
     stack = lambda xs: jnp.stack(xs, axis=-1)
     w = jnp.where(fp.covered[:, None], stack(weights), 0.0)
