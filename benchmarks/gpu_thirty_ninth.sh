@@ -36,6 +36,7 @@
 #   traced the sequence inside another jit, where the sheet cannot be built).
 # prof38: as gpu_thirty_eighth.sh's (object space's and forward's 8-frame sequences on glass
 #   by scope).
+# All three calls ran on H100s (RESULTS.md, thirty-ninth session); no H200 came.
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
 . "$(dirname "$0")/gpu_env.sh"
 export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
