@@ -36,11 +36,14 @@ def bilinear_level(tex: Textures, tex_id: Array, uv: Array, level: Array) -> Arr
     ty = (1.0 - uv[:, 1]) * sf - 0.5
     x0f, y0f = jnp.floor(tx), jnp.floor(ty)
     fx, fy = (tx - x0f)[:, None], (ty - y0f)[:, None]
-    # Reduce before the int cast so huge uvs (stripes to the horizon) stay exact.
-    x0 = jnp.mod(x0f, sf).astype(jnp.int32)
-    y0 = jnp.mod(y0f, sf).astype(jnp.int32)
-    x1 = jnp.mod(x0 + 1, size)
-    y1 = jnp.mod(y0 + 1, size)
+    # Wrapped before the int cast so huge uvs (stripes to the horizon) stay exact. Sizes are
+    # powers of two: the wrap is a multiply, a floor and a mask, each exact, where jnp.mod
+    # would run a float remainder and an integer division per texel.
+    inv = 1.0 / sf
+    x0 = (x0f - jnp.floor(x0f * inv) * sf).astype(jnp.int32)
+    y0 = (y0f - jnp.floor(y0f * inv) * sf).astype(jnp.int32)
+    x1 = (x0 + 1) & (size - 1)
+    y1 = (y0 + 1) & (size - 1)
     base = (tex_id * rows + (2 * r - 2 * size)) * r
 
     def at(y, x):
