@@ -116,3 +116,30 @@ def test_toksvig_lowers_the_peak_of_a_filtered_bumpy_normal_map():
     plain = float(np.asarray(shade(p, scene))[0, 0])
     tok = float(np.asarray(shade(p, scene, scene.effects.replace(toksvig=True)))[0, 0])
     assert np.isfinite(tok) and tok < 0.5 * plain, (plain, tok)
+
+
+def test_far_texel_coordinates_wrap_exactly():
+    # uvs far from the origin (a ground plane to the horizon): the texel coordinate is wrapped
+    # before the int cast. Oracle: the same float32 coordinate, wrapped with Python's exact
+    # integer modulo, bilinear at level 0 (tiny derivatives).
+    rng = np.random.default_rng(5)
+    img = rng.uniform(size=(16, 16, 4))
+    tex = pack_textures([img])
+    n = 200
+    uv = (rng.uniform(-1, 1, size=(n, 2)) * 10.0 ** rng.uniform(0, 7, size=(n, 1))
+          ).astype(np.float32)
+    tiny = np.full((n, 2), 1e-6, np.float32)
+    got = np.asarray(jax.jit(sample)(tex, jnp.zeros(n, jnp.int32), jnp.asarray(uv),
+                                     jnp.asarray(tiny), jnp.asarray(tiny)))
+    s = np.float32(16)
+    want = []
+    for u, v in uv:
+        tx, ty = u * s - np.float32(0.5), (np.float32(1) - v) * s - np.float32(0.5)
+        x0f, y0f = np.floor(tx), np.floor(ty)
+        fx, fy = float(tx - x0f), float(ty - y0f)
+        x0, y0 = int(x0f) % 16, int(y0f) % 16
+        t = lambda yy, xx: img[yy % 16, xx % 16]  # noqa: E731
+        want.append((1 - fy) * ((1 - fx) * t(y0, x0) + fx * t(y0, x0 + 1))
+                    + fy * ((1 - fx) * t(y0 + 1, x0) + fx * t(y0 + 1, x0 + 1)))
+    np.testing.assert_allclose(got, np.array(want), atol=2e-5,
+                               err_msg="far texel coordinates vs exact integer wrap")
