@@ -136,9 +136,9 @@ def _program(pipe, static_cfg, mode, outputs, scene, static, cameras, traced, st
 _program_jit = jax.jit(_program, static_argnums=(0, 1, 2, 3))
 
 # On a GPU XLA reads every loop condition and branch index back to the host before it goes on,
-# unless its CUDA graphs hold the loops and branches too (conditional nodes): these pipelines
-# run faster so and the others were slower so (RESULTS.md, thirty-ninth and twelfth sessions).
-# Other platforms ignore the option.
+# unless its CUDA graphs hold the loops and branches too (conditional nodes). Forward and
+# object space run faster so; DACS, TADS and the visibility buffer ran slower so when last
+# measured (RESULTS.md, thirty-ninth and twelfth sessions). Other platforms ignore the option.
 DEVICE_CONTROL_FLOW = ("forward", "object_space")
 GRAPH_COMMANDS = "FUSION,CUBLAS,CUBLASLT,CUSTOM_CALL,CUDNN,CONDITIONAL,WHILE"
 _program_graphs_jit = jax.jit(_program, static_argnums=(0, 1, 2, 3),
