@@ -37,6 +37,17 @@
 # prof38: as gpu_thirty_eighth.sh's (object space's and forward's 8-frame sequences on glass
 #   by scope).
 # All three calls ran on H100s (RESULTS.md, thirty-ninth session); no H200 came.
+# Next session (carry [".whl", ".v/pre39"]; .v/pre39 is `git archive 07ab04a jaxrender`, the
+# tree before the two untimed changes):
+#   GRAPH_PIPES="deferred checkerboard dacs visbuffer tads" bash benchmarks/gpu_thirty_ninth.sh \
+#     untimed graphs
+# untimed: object space on glass and deferred on room, pre39 against this tree (A B B A): the
+#   taps' chunk and lane by shifts and masks (cd951d1; predicted 0.05-0.2 ms a frame faster
+#   for object space) and the texture's wrap without remainders (0a16079; predicted a few
+#   percent of a textured scene's shading).
+# graphs with GRAPH_PIPES: the other pipelines with and without loops and branches in CUDA
+#   graphs (XLA_FLAGS; forward and object space have them as a compile option already), to
+#   decide `program.DEVICE_CONTROL_FLOW` for them.
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
 . "$(dirname "$0")/gpu_env.sh"
 export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
@@ -52,10 +63,13 @@ for part in $(targets_first "$*"); do
     for cfg in default graphs graphs default; do
       flags=""
       [ "$cfg" = graphs ] && flags="--xla_gpu_enable_command_buffer=$G"
-      XLA_FLAGS="$flags" PYTHONPATH=$PWD:/tmp/site timeout -k 5 140 $S --scenes glass \
-        --pipelines forward object_space 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
+      XLA_FLAGS="$flags" PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 $S --scenes glass \
+        --pipelines ${GRAPH_PIPES:-forward object_space} 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
         | grep '^|' | sed "s/^/$cfg: /" | tee -a "$OUT/graphs.md"
     done
+  elif [ "$part" = untimed ]; then
+    side_by_side untimed_os 150 "pre39 after" --scenes glass --pipelines object_space
+    side_by_side untimed_room 150 "pre39 after" --scenes room --pipelines deferred
   elif [ "$part" = final39 ]; then
     nvidia-smi --query-gpu=name --format=csv,noheader | tee -a "$OUT/final39.md"
     PYTHONPATH=$PWD:/tmp/site timeout -k 5 200 $S --scenes glass room --pipelines forward \
