@@ -39,13 +39,12 @@
 # All three calls ran on H100s (RESULTS.md, thirty-ninth session); no H200 came.
 # Next session (carry [".whl", ".v/pre39"]; .v/pre39 is `git archive 07ab04a jaxrender`, the
 # tree before the two untimed changes):
-#   GRAPH_PIPES="deferred checkerboard dacs visbuffer tads" bash benchmarks/gpu_thirty_ninth.sh \
-#     untimed graphs
+#   bash benchmarks/gpu_thirty_ninth.sh untimed graphs
 # untimed: object space on glass and deferred on room, pre39 against this tree (A B B A): the
 #   taps' chunk and lane by shifts and masks (cd951d1; predicted 0.05-0.2 ms a frame faster
 #   for object space) and the texture's wrap without remainders (0a16079; predicted a few
 #   percent of a textured scene's shading).
-# graphs with GRAPH_PIPES: the other pipelines with and without loops and branches in CUDA
+# graphs (GRAPH_PIPES, default the five below; call 1 ran forward and object space): the other pipelines with and without loops and branches in CUDA
 #   graphs (XLA_FLAGS; forward and object space have them as a compile option already), to
 #   decide `program.DEVICE_CONTROL_FLOW` for them.
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
@@ -64,7 +63,7 @@ for part in $(targets_first "$*"); do
       flags=""
       [ "$cfg" = graphs ] && flags="--xla_gpu_enable_command_buffer=$G"
       XLA_FLAGS="$flags" PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 $S --scenes glass \
-        --pipelines ${GRAPH_PIPES:-forward object_space} 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
+        --pipelines ${GRAPH_PIPES:-deferred checkerboard dacs visbuffer tads} 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
         | grep '^|' | sed "s/^/$cfg: /" | tee -a "$OUT/graphs.md"
     done
   elif [ "$part" = untimed ]; then
