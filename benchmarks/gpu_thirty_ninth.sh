@@ -44,9 +44,9 @@
 #   taps' chunk and lane by shifts and masks (cd951d1; predicted 0.05-0.2 ms a frame faster
 #   for object space) and the texture's wrap without remainders (0a16079; predicted a few
 #   percent of a textured scene's shading).
-# graphs (GRAPH_PIPES, default the five below; call 1 ran forward and object space): the other pipelines with and without loops and branches in CUDA
-#   graphs (XLA_FLAGS; forward and object space have them as a compile option already), to
-#   decide `program.DEVICE_CONTROL_FLOW` for them.
+# graphs (GRAPH_PIPES; call 1 ran forward and object space, the default is the other five):
+#   those pipelines with and without loops and branches in CUDA graphs (XLA_FLAGS; forward and
+#   object space have them as a compile option now), to decide `DEVICE_CONTROL_FLOW` for them.
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
 . "$(dirname "$0")/gpu_env.sh"
 export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
@@ -63,8 +63,8 @@ for part in $(targets_first "$*"); do
       flags=""
       [ "$cfg" = graphs ] && flags="--xla_gpu_enable_command_buffer=$G"
       XLA_FLAGS="$flags" PYTHONPATH=$PWD:/tmp/site timeout -k 5 240 $S --scenes glass \
-        --pipelines ${GRAPH_PIPES:-deferred checkerboard dacs visbuffer tads} 2>&1 | quiet | tee -a "$OUT/graphs_$cfg.log" \
-        | grep '^|' | sed "s/^/$cfg: /" | tee -a "$OUT/graphs.md"
+        --pipelines ${GRAPH_PIPES:-deferred checkerboard dacs visbuffer tads} 2>&1 | quiet \
+        | tee -a "$OUT/graphs_$cfg.log" | grep '^|' | sed "s/^/$cfg: /" | tee -a "$OUT/graphs.md"
     done
   elif [ "$part" = untimed ]; then
     side_by_side untimed_os 150 "pre39 after" --scenes glass --pipelines object_space
