@@ -4,7 +4,8 @@
 # sequence bench in several trees side by side (each run's whole output kept in a log), a tree
 # not carried refused by tree_root(), prof() for a program's kernels by scope,
 # layer_bench() for the shader-cost layers bench, time_work() for the time-work fits,
-# bundle_out() to pack $OUT into one file, and targets_first() to run issue 23's rows first on
+# cached_compiles() and S8 for the side-by-side sequence parts, bundle_out() to pack $OUT into
+# one file, and targets_first() to run issue 23's rows first on
 # an H200.
 set -u
 OUT=${OUT:?OUT must name an output folder}
@@ -80,6 +81,13 @@ layer_bench() {
     --scenes foliage room --sizes 4096 16384 65536 0 --repeats 10 --label "$label" "$@" \
     --out "$OUT/$file.jsonl" 2>&1 | quiet | tee -a "$OUT/$file.md"
 }
+# cached_compiles: JAX's persistent cache for the side-by-side parts (a tree's second pass
+# loads its programs), and S8, the 8-frame images-only sequence bench they time.
+cached_compiles() {
+  export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
+    JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
+}
+S8="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
 # bundle_out: every file in $OUT but the bundle appended to $OUT/bundle.tar and removed. A call
 # brings back at most 8 files from $OUT (device README); a script that calls this after each
 # part leaves the bundle and the running part's files, so a call cut at its limit still

@@ -30,9 +30,8 @@
 #   targets part times those two (8-frame pans, 3 rounds, images only); last timed on an H100
 #   in the twenty-fourth session (every row under 3 ms, forward's highest 2.97).
 . "$(dirname "$0")/gpu_env.sh"
-export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
-  JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
-S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+cached_compiles
+S=$S8
 for part in $(targets_first "$*"); do
   if [ "$part" = targets ]; then
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_fifth.sh targets

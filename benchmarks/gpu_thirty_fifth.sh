@@ -34,11 +34,6 @@
 #   fewer), deferred and forward 0.02-0.06 (one host read fewer a fragment list); after
 #   against wp, deferred, DACS and forward 0.05-0.12 faster (the sort's gather).
 . "$(dirname "$0")/gpu_env.sh"
-# JAX's persistent cache for the side-by-side parts: a tree's second pass loads its programs.
-cached_compiles() {
-  export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
-    JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
-}
 for part in $*; do
   if [ "$part" = targets ]; then
     OUT=$OUT bash benchmarks/gpu_thirty_fourth.sh targets

@@ -49,9 +49,8 @@
 #   object space have them as a compile option now), to decide `DEVICE_CONTROL_FLOW` for them.
 # ten1, ten2: as gpu_thirty_eighth.sh's (the ten other built-in scenes on an H200).
 . "$(dirname "$0")/gpu_env.sh"
-export JAX_COMPILATION_CACHE_DIR=/tmp/jcc JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0 \
-  JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES=0
-S="python3 benchmarks/bench_sequence.py --frames 8 --rounds 3 --no-single --outputs images"
+cached_compiles
+S=$S8
 for part in $(targets_first "$*"); do
   if [ "$part" = clipjoin ]; then
     side_by_side clipjoin 120 "b39 after" --scenes glass --pipelines forward deferred
