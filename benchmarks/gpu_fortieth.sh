@@ -8,11 +8,12 @@
 #   its kernels only 0.34: 80 more launches, and the time between them, made its slope 2.63x
 #   deferred's. Predicted with graphs: DACS's slope 1.6-2.2x deferred's, its fixed cost
 #   0.1-0.3 ms lower; deferred within 5%.
-# layfits (carry .v/lay: this tree with the shader-cost layers summed in one reduction of
-#   stacked channels, each layer's normal scaled by a constant rather than normalized per
-#   point): foliage, costs 0 and 256, this tree then lay, then lay with the graphs. In the
+# layfits (carry .v/base: `git archive f74db23 jaxrender`, the tree before the shader-cost
+#   layers were summed in one reduction of their per-light terms, each layer's normal scaled
+#   by a constant rather than normalized per point): foliage, costs 0 and 256, base, this
+#   tree, then this tree with the graphs. In the
 #   offline H100 program every shading launch at cost 256 stored a [257, lanes] array of each
-#   layer's cosine and read it in two kernels (and six column copies); in lay the layers are
+#   layer's cosine and read it in two kernels (and six column copies); now the layers are
 #   summed inside one reduction (DACS's launches at cost 256: 1,138 -> 916). Predicted:
 #   deferred's slope 3-10x lower; DACS's fixed cost unchanged, its slope closer to deferred's
 #   per lane (its 80 extra launches at cost 256 fall to about 15).
@@ -30,9 +31,9 @@ for part in $(targets_first "$*"); do
         --repeats 5 --budget 115 --label "$cfg"
     done
   elif [ "$part" = layfits ]; then
-    for cfg in after lay lay_graphs; do
+    for cfg in base after after_graphs; do
       flags=""
-      [ "$cfg" = lay_graphs ] && flags="--xla_gpu_enable_command_buffer=$G"
+      [ "$cfg" = after_graphs ] && flags="--xla_gpu_enable_command_buffer=$G"
       R=$(tree_root "${cfg%_graphs}") || continue
       XLA_FLAGS="$flags" PYTHONPATH=$R:/tmp/site timeout -k 5 170 python3 \
         benchmarks/bench_time_work.py --scenes foliage --pipelines ${LAY_PIPES:-deferred dacs} \

@@ -44,6 +44,12 @@ def ggx(f0: Array, alpha: Array, n_dot_l: Array, n_dot_v: Array, n_dot_h: Array,
         v_dot_h: Array) -> Array:
     """Cook-Torrance with the GGX distribution, height-correlated Smith visibility and Schlick
     Fresnel. alpha = roughness^2."""
+    return ggx_dv(alpha, n_dot_l, n_dot_v, n_dot_h) * schlick(f0, v_dot_h)
+
+
+def ggx_dv(alpha: Array, n_dot_l: Array, n_dot_v: Array, n_dot_h: Array) -> Array:
+    """``ggx`` without its Fresnel factor: the GGX distribution times the height-correlated
+    Smith visibility, 0 where the light is below the surface."""
     a2 = jnp.square(jnp.maximum(alpha, 1e-3))
     nl = jnp.clip(n_dot_l, 0.0, 1.0)
     nv = jnp.clip(n_dot_v, 1e-4, 1.0)
@@ -52,5 +58,9 @@ def ggx(f0: Array, alpha: Array, n_dot_l: Array, n_dot_v: Array, n_dot_h: Array,
     d = a2 * INV_PI / jnp.square(jnp.maximum(denom, 1e-12))
     vis = 0.5 / jnp.maximum(nl * jnp.sqrt(nv * nv * (1.0 - a2) + a2)
                             + nv * jnp.sqrt(nl * nl * (1.0 - a2) + a2), 1e-12)
-    fresnel = f0 + (1.0 - f0) * jnp.power(1.0 - jnp.clip(v_dot_h, 0.0, 1.0), 5.0)
-    return d * vis * fresnel * jnp.where(n_dot_l > 0.0, 1.0, 0.0)
+    return d * vis * jnp.where(n_dot_l > 0.0, 1.0, 0.0)
+
+
+def schlick(f0: Array, v_dot_h: Array) -> Array:
+    """Schlick's Fresnel approximation, f0 + (1 - f0) (1 - v.h)^5."""
+    return f0 + (1.0 - f0) * jnp.power(1.0 - jnp.clip(v_dot_h, 0.0, 1.0), 5.0)

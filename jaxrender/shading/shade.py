@@ -168,33 +168,55 @@ class PointFrame(NamedTuple):
     valid: Array
 
 
+def _half_vectors(frame: PointFrame, incoming: list, n: tuple) -> list:
+    """Per light, the half vector between it and the view (``n`` where they are opposite)."""
+    return [normalize3(tuple(a + b for a, b in zip(l_dir, frame.view)), n)
+            for l_dir, _ in incoming]
+
+
 @jax.named_scope("lights")
-def _light_sum(frame: PointFrame, scene: Scene, effects: Effects, n: tuple, albedo: tuple,
-               spec_params, incoming: list) -> tuple:
-    """Sum over all directional and point lights of f(l, v) E cos at shading normal ``n``, per
-    colour channel (a component tuple of float32[N]), given ``_incoming``'s terms."""
-    ng, v, mat = frame.normal, frame.view, frame.material
-    total = None
-    for l_dir, e in incoming:
+def _light_sum(frame: PointFrame, scene: Scene, effects: Effects, n: tuple, spec_params,
+               incoming: list, halves: list | None) -> list:
+    """Per light, what depends on the shading normal ``n`` (float32[N] each): the clamped
+    cosine, and times it the Blinn-Phong lobe for a unit ks and GGX's D V (None without
+    specular lobes); ``_lit`` weighs them by colour. The shader-cost layers sum these over
+    their nudged normals before weighing: one scalar a term, so XLA computes each layer's
+    terms inside the sum rather than storing them for every layer and point."""
+    ng, v = frame.normal, frame.view
+    out = []
+    for j, (l_dir, _) in enumerate(incoming):
         cos = dot3(n, l_dir)
         cos_c = jnp.where(dot3(ng, l_dir) > 0.0, jnp.maximum(cos, 0.0), 0.0)
-        f = [brdf.lambert(a) for a in albedo]
+        phong = ggx = None
         if effects.specular:
-            ks, shin, alpha_g = spec_params
-            kind = _gather(scene.materials.brdf, mat)
-            h = normalize3(tuple(a + b for a, b in zip(l_dir, v)), n)
-            n_h = dot3(n, h)
+            _, shin, alpha_g = spec_params
+            n_h = dot3(n, halves[j])
             if BLINN_PHONG in effects.brdfs:
-                f = [fc + jnp.where(kind == BLINN_PHONG, brdf.blinn_phong(k, shin, n_h), 0.0)
-                     for fc, k in zip(f, ks)]
+                phong = brdf.blinn_phong(1.0, shin, n_h) * cos_c
             if GGX in effects.brdfs:
-                n_v, v_h = dot3(n, v), dot3(v, h)
-                f = [fc + jnp.where(kind == GGX, brdf.ggx(k, alpha_g, cos, n_v, n_h, v_h), 0.0)
-                     for fc, k in zip(f, ks)]
-        terms = tuple(fc * ec * cos_c for fc, ec in zip(f, e))
-        total = terms if total is None else tuple(a + b for a, b in zip(total, terms))
-    if total is None:
-        return tuple(jnp.zeros_like(a) for a in albedo)
+                ggx = brdf.ggx_dv(alpha_g, cos, dot3(n, v), n_h) * cos_c
+        out.append((cos_c, phong, ggx))
+    return out
+
+
+def _lit(terms: list, frame: PointFrame, scene: Scene, effects: Effects, albedo: tuple,
+         spec_params, incoming: list, halves: list | None) -> tuple:
+    """Sum over all directional and point lights of f(l, v) E cos, per colour channel (a
+    component tuple of float32[N]), from ``_light_sum``'s terms: E (albedo / pi cos + ks
+    phong + F ggx), F Schlick's Fresnel of ks at the half vector."""
+    total = tuple(jnp.zeros_like(a) for a in albedo)
+    if effects.specular:
+        ks = spec_params[0]
+        kind = _gather(scene.materials.brdf, frame.material)
+    for j, ((_, e), (cos_c, phong, ggx)) in enumerate(zip(incoming, terms)):
+        f = [brdf.lambert(a) * cos_c for a in albedo]
+        if phong is not None:
+            f = [fc + jnp.where(kind == BLINN_PHONG, k * phong, 0.0) for fc, k in zip(f, ks)]
+        if ggx is not None:
+            v_h = dot3(frame.view, halves[j])
+            f = [fc + jnp.where(kind == GGX, brdf.schlick(k, v_h) * ggx, 0.0)
+                 for fc, k in zip(f, ks)]
+        total = tuple(a + fc * ec for a, fc, ec in zip(total, f, e))
     return total
 
 
@@ -210,6 +232,23 @@ def _store(tree, n: int):
     return jax.tree.unflatten(treedef, leaves)
 
 
+def summed_over_layers(tree):
+    """Each leaf of ``tree`` summed over its leading (layer) axis, the leaves of one shape and
+    type in one reduction of them stacked: reduced leaf by leaf, they were separate kernels
+    that each read a term the layers share, and XLA stored that term for every layer and lane
+    so that each could."""
+    leaves, treedef = jax.tree.flatten(tree)
+    groups: dict = {}
+    for i, x in enumerate(leaves):
+        groups.setdefault((x.shape, x.dtype), []).append(i)
+    sums = [None] * len(leaves)
+    for members in groups.values():
+        total = jnp.sum(jnp.stack([leaves[i] for i in members], axis=-1), axis=0)
+        for k, i in enumerate(members):
+            sums[i] = total[..., k]
+    return jax.tree.unflatten(treedef, sums)
+
+
 def layer_sum(layer, angles: Array, lanes: int):
     """sum_k layer(angles[k]) (an array, or a pytree of them, summed leaf by leaf) for a
     ``layer`` over ``lanes`` points: batched over the layers (vmap), in blocks of as many
@@ -222,7 +261,7 @@ def layer_sum(layer, angles: Array, lanes: int):
     block = max(1, LAYER_LANES // max(int(lanes), 1))
 
     def batch(some):  # the layers of ``some`` evaluated together and summed
-        return jax.tree.map(lambda x: jnp.sum(x, axis=0), jax.vmap(layer)(some))
+        return summed_over_layers(jax.vmap(layer)(some))
 
     def add(a, b):
         return jax.tree.map(jnp.add, a, b)
@@ -239,6 +278,39 @@ def layer_sum(layer, angles: Array, lanes: int):
     if n_layers > n_blocks * block:
         total = add(total, batch(angles[n_blocks * block:]))
     return total
+
+
+def _layered_terms(points, scene, effects, n, spec_params, incoming, halves, albedo, frame):
+    """``_light_sum``'s terms averaged over 1 + shader_cost layers, each with the normal nudged
+    along the tangent by its own angle (< LAYER_NUDGE), so XLA cannot hoist or merge them;
+    and the per-point inputs of ``_lit``, stored once."""
+    shared_out = (incoming, halves, albedo, spec_params, frame)
+    if not incoming:  # no lights: no terms to sum
+        return [], shared_out
+    layers = 1 + effects.shader_cost
+    tangent = components(points.tangent)[:3]
+    zero = tuple(jnp.zeros_like(c) for c in n)
+    t = normalize3(tuple(a - c * dot3(n, tangent) for a, c in zip(tangent, n)), zero)
+    angles = LAYER_NUDGE * ((jnp.arange(layers, dtype=jnp.float32) + 0.5) / layers - 0.5)
+    # |n + ang t| = sqrt(1 + ang^2) for the unit n and its unit perpendicular t (0 where the
+    # tangent is degenerate): each layer's normal is scaled by a constant of the layer. A
+    # square root per layer and point made XLA store each layer's terms for every point
+    # rather than compute them inside the sum.
+    scales = jax.lax.rsqrt(1.0 + jnp.square(angles))
+    # What every layer shares (the lights' directions and irradiance, the shadow lookups
+    # among them, the half vectors, the lobes' parameters and the point's frame), computed
+    # and stored once: fused into the batched layers, XLA computed it again for each layer.
+    incoming, halves, n, t, albedo, spec_params, frame = _store(
+        (incoming, halves, n, t, albedo, spec_params, frame), points.material.shape[0])
+
+    def layer(ang_scale):
+        ang, scale = ang_scale[0], ang_scale[1]
+        n_i = tuple((a + b * ang) * scale for a, b in zip(n, t))
+        return _light_sum(frame, scene, effects, n_i, spec_params, incoming, halves)
+
+    sums = layer_sum(layer, jnp.stack([angles, scales], axis=1), points.material.shape[0])
+    return (jax.tree.map(lambda x: x / layers, sums),
+            (incoming, halves, albedo, spec_params, frame))
 
 
 @jax.named_scope("shade")
@@ -273,29 +345,14 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None,
     # From here on every vector is a tuple of per-point components (``vec.components``).
     n, albedo = components(n), components(albedo)
     frame = PointFrame(components(points.normal), components(points.view), mat, points.valid)
-    layers = 1 + effects.shader_cost
-    if layers == 1:
-        direct = _light_sum(frame, scene, effects, n, albedo, spec_params,
-                            _incoming(points, scene, effects))
+    incoming = _incoming(points, scene, effects)
+    halves = _half_vectors(frame, incoming, n) if effects.specular else None
+    if effects.shader_cost == 0:
+        terms = _light_sum(frame, scene, effects, n, spec_params, incoming, halves)
     else:
-        # Shader-cost layers: the lights again with the normal nudged along the tangent by
-        # a layer-dependent angle (< LAYER_NUDGE), so XLA cannot hoist or merge the layers.
-        tangent = components(points.tangent)[:3]
-        t = normalize3(tuple(a - c * dot3(n, tangent) for a, c in zip(tangent, n)), n)
-        angles = LAYER_NUDGE * ((jnp.arange(layers, dtype=jnp.float32) + 0.5) / layers - 0.5)
-
-        # What every layer shares (the lights' directions and irradiance, the shadow lookups
-        # among them, and the point's frame), computed and stored once: fused into the batched
-        # layers, XLA computed it again for each layer.
-        incoming = _incoming(points, scene, effects)
-        if incoming:
-            incoming, n, t, albedo, frame = _store((incoming, n, t, albedo, frame), mat.shape[0])
-
-        def layer(ang):
-            n_i = normalize3(tuple(a + b * ang for a, b in zip(n, t)), n)
-            return _light_sum(frame, scene, effects, n_i, albedo, spec_params, incoming)
-
-        direct = tuple(c / layers for c in layer_sum(layer, angles, mat.shape[0]))
+        terms, (incoming, halves, albedo, spec_params, frame) = _layered_terms(
+            points, scene, effects, n, spec_params, incoming, halves, albedo, frame)
+    direct = _lit(terms, frame, scene, effects, albedo, spec_params, incoming, halves)
     rgb = [d + a * scene.lights.ambient[c] for c, (d, a) in enumerate(zip(direct, albedo))]
     if effects.emissive:
         rgb = [x + e for x, e in zip(rgb, components(_gather(m.emissive, mat)))]
