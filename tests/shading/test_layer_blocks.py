@@ -4,6 +4,7 @@ of the single batch, and with temporaries bounded by the block rather than by ev
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 
 import jax
@@ -85,3 +86,48 @@ def test_a_costly_launch_shades_the_same_in_blocks_with_bounded_temporaries(monk
     t_one = one.memory_analysis().temp_size_in_bytes
     t_blocks = blocks.memory_analysis().temp_size_in_bytes
     assert t_blocks * 4 < t_one, (t_blocks, t_one)
+
+
+def _nudged_normals(pts, n_layers: int) -> np.ndarray:
+    """float64[layers, N, 3]: the layers' normals by their definition, normalize(n + a t),
+    t the unit tangent made perpendicular to n, a spread over (-LAYER_NUDGE/2, LAYER_NUDGE/2)."""
+    n = np.asarray(pts.shading_normal, np.float64)
+    tan = np.asarray(pts.tangent, np.float64)[:, :3]
+    t = tan - n * np.sum(n * tan, axis=1, keepdims=True)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    angles = SHADE_MODULE.LAYER_NUDGE * ((np.arange(n_layers) + 0.5) / n_layers - 0.5)
+    nudged = n[None] + angles[:, None, None] * t[None]
+    return nudged / np.linalg.norm(nudged, axis=2, keepdims=True)
+
+
+@pytest.mark.parametrize("scene_name", ["foliage", "terrain", "glass", "spheres"])
+def test_the_layers_average_the_shader_over_nudged_normals(scene_name):
+    # Diffuse (foliage), Lambert and GGX (terrain), Blinn-Phong (glass, spheres): the layered
+    # shader, which sums its per-light terms over the layers before weighing them by colour,
+    # against the plain shader run once per layer with that layer's normal, averaged.
+    cost = 5
+    plain = load_lit_scene(scene_name)
+    rng = np.random.default_rng(21)
+    n = 256
+    tri = rng.integers(0, plain.faces.shape[0], n).astype(np.int32)
+    bary = rng.dirichlet(np.ones(3), n).astype(np.float32)
+    zeros = np.zeros((n, 3), np.float32)
+    pts = jax.jit(surface_points)(plain, plain.camera, jnp.asarray(tri), jnp.asarray(bary),
+                                  jnp.asarray(zeros), jnp.asarray(zeros))
+    # Points whose tangent is (nearly) parallel to their normal have no nudge direction.
+    tan = np.asarray(pts.tangent)[:, :3]
+    sn = np.asarray(pts.shading_normal)
+    perp = np.linalg.norm(tan - sn * np.sum(sn * tan, 1, keepdims=True), axis=1)
+    keep = np.asarray(pts.valid) & (perp > 1e-2)
+    assert keep.sum() > n // 2, keep.sum()
+    costly = with_shader_cost(plain, cost)
+    got = np.asarray(jax.jit(shade)(pts, costly))
+    shade_plain = jax.jit(shade)
+    want = np.mean([np.asarray(shade_plain(dataclasses.replace(
+        pts, shading_normal=jnp.asarray(normal, jnp.float32)), plain))
+        for normal in _nudged_normals(pts, cost + 1)], axis=0)
+    # Blinn-Phong exponents up to 4096 (spheres) magnify the normals' float32 rounding: 2.4e-5
+    # of a value at most, where the shader normalized each layer's normal (1.6e-5).
+    np.testing.assert_allclose(got[keep], want[keep], rtol=5e-5, atol=2e-6,
+                               err_msg=f"{scene_name}: layers against the plain shader's mean")
+    assert np.abs(want[keep]).max() > 0.05, "lit points, not black ones"
