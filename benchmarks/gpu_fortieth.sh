@@ -31,7 +31,7 @@ for part in $(targets_first "$*"); do
         --repeats 5 --budget 115 --label "$cfg"
     done
   elif [ "$part" = layfits ]; then
-    for cfg in base after after_graphs; do
+    for cfg in ${LAY_CFGS:-base after after_graphs}; do
       flags=""
       [ "$cfg" = after_graphs ] && flags="--xla_gpu_enable_command_buffer=$G"
       R=$(tree_root "${cfg%_graphs}") || continue
