@@ -157,8 +157,7 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
         with jax.named_scope("interpolate"):
             interp = sum_small(wts[:, :, None] * c, axis=1)
             val = jnp.where((cov & ~need)[:, None], interp, 0.0)
-            img = img.at[pix].set(val, unique_indices=True)
-        return img, need
+        return val, need
 
     img = jnp.zeros((n_pix, 3), jnp.float32)
     levels = level_pixels(h, w, spacing)
@@ -172,13 +171,16 @@ def dacs_reconstruct(shade_fn: Callable[[Array, Array], Array], ids: Array, cove
         pix = jnp.asarray(level_pix, jnp.int32)
         cov = cov_f[pix]
         if level == 0:  # always shaded
-            need = cov
+            need, val = cov, jnp.zeros((len(level_pix), 3), jnp.float32)
         else:
-            img, need = decide_and_interpolate(level, pix, cov, img)
+            val, need = decide_and_interpolate(level, pix, cov, img)
         with jax.named_scope("shade"):
+            # Shaded into the level's own values, then the level written into the image once:
+            # a launch that scattered into the image copied all of it (25 MB at 1080p) first.
             listed = dispatch.WorkList.of(need)
-            img, work = dispatch.run(dispatch.WorkList(pix[listed.items], listed.count),
-                                     shade_fn, img, level_chunk, default_mode="switch")
+            val, work = dispatch.run(listed, lambda items, live: shade_fn(pix[items], live),
+                                     val, level_chunk, default_mode="switch")
+        img = img.at[pix].set(val, unique_indices=True)
         needs.append(need)
         inv, lanes, chunks = inv + work.invocations, lanes + work.lanes, chunks + work.chunks
     warp = dacs_warp.simulate(needs, warp_width, warp_batches)
