@@ -175,7 +175,7 @@ def _half_vectors(frame: PointFrame, incoming: list, n: tuple) -> list:
 
 
 @jax.named_scope("lights")
-def _light_sum(frame: PointFrame, scene: Scene, effects: Effects, n: tuple, spec_params,
+def _light_terms(frame: PointFrame, scene: Scene, effects: Effects, n: tuple, spec_params,
                incoming: list, halves: list | None) -> list:
     """Per light, what depends on the shading normal ``n`` (float32[N] each): the clamped
     cosine, and times it the Blinn-Phong lobe for a unit ks and GGX's D V (None without
@@ -202,7 +202,7 @@ def _light_sum(frame: PointFrame, scene: Scene, effects: Effects, n: tuple, spec
 def _lit(terms: list, frame: PointFrame, scene: Scene, effects: Effects, albedo: tuple,
          spec_params, incoming: list, halves: list | None) -> tuple:
     """Sum over all directional and point lights of f(l, v) E cos, per colour channel (a
-    component tuple of float32[N]), from ``_light_sum``'s terms: E (albedo / pi cos + ks
+    component tuple of float32[N]), from ``_light_terms``'s terms: E (albedo / pi cos + ks
     phong + F ggx), F Schlick's Fresnel of ks at the half vector."""
     total = tuple(jnp.zeros_like(a) for a in albedo)
     if effects.specular:
@@ -250,7 +250,7 @@ def summed_over_layers(tree):
 
 
 def layer_sum(layer, angles: Array, lanes: int):
-    """sum_k layer(angles[k]) (an array, or a pytree of them, summed leaf by leaf) for a
+    """sum_k layer(angles[k]) (an array, or a pytree of them, each leaf summed) for a
     ``layer`` over ``lanes`` points: batched over the layers (vmap), in blocks of as many
     layers as keep a block's evaluations within LAYER_LANES. All
     the layers in one block need no loop; more run in a ``fori_loop`` of whole blocks, whose
@@ -281,7 +281,7 @@ def layer_sum(layer, angles: Array, lanes: int):
 
 
 def _layered_terms(points, scene, effects, n, spec_params, incoming, halves, albedo, frame):
-    """``_light_sum``'s terms averaged over 1 + shader_cost layers, each with the normal nudged
+    """``_light_terms``'s terms averaged over 1 + shader_cost layers, each with the normal nudged
     along the tangent by its own angle (< LAYER_NUDGE), so XLA cannot hoist or merge them;
     and the per-point inputs of ``_lit``, stored once."""
     shared_out = (incoming, halves, albedo, spec_params, frame)
@@ -306,7 +306,7 @@ def _layered_terms(points, scene, effects, n, spec_params, incoming, halves, alb
     def layer(ang_scale):
         ang, scale = ang_scale[0], ang_scale[1]
         n_i = tuple((a + b * ang) * scale for a, b in zip(n, t))
-        return _light_sum(frame, scene, effects, n_i, spec_params, incoming, halves)
+        return _light_terms(frame, scene, effects, n_i, spec_params, incoming, halves)
 
     sums = layer_sum(layer, jnp.stack([angles, scales], axis=1), points.material.shape[0])
     return (jax.tree.map(lambda x: x / layers, sums),
@@ -348,7 +348,7 @@ def shade(points: SurfacePoints, scene: Scene, effects: Effects | None = None,
     incoming = _incoming(points, scene, effects)
     halves = _half_vectors(frame, incoming, n) if effects.specular else None
     if effects.shader_cost == 0:
-        terms = _light_sum(frame, scene, effects, n, spec_params, incoming, halves)
+        terms = _light_terms(frame, scene, effects, n, spec_params, incoming, halves)
     else:
         terms, (incoming, halves, albedo, spec_params, frame) = _layered_terms(
             points, scene, effects, n, spec_params, incoming, halves, albedo, frame)

@@ -1,9 +1,9 @@
 """Skipped work stays skipped, counted at run time: every evaluation of the shader's light
-layer (``shading.shade``'s ``_light_sum``, the one place a layer is computed) reports from inside
-the compiled program how many lanes it ran and how many of them were live. Checkerboard shades
-half the points of deferred and runs half the layer evaluations, the counts the pipelines
-report are those evaluations, and a shader cost of c runs each chunk's layer 1 + c times:
-``shading_work = shade_invocations x (1 + shader_cost)`` is the work the program did."""
+layer (``shading.shade``'s ``_light_terms``, the one place a layer is computed) reports from
+inside the compiled program how many lanes it ran and how many of them were live. Checkerboard
+shades half the points of deferred and runs half the layer evaluations, the counts the
+pipelines report are those evaluations, and a shader cost of c runs each chunk's layer 1 + c
+times: ``shading_work = shade_invocations x (1 + shader_cost)`` is the work the program did."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def _counted(monkeypatch):
     """Patch the layer evaluation to report (lanes, live points) per call; returns the list."""
     shade_module = importlib.import_module("jaxrender.shading.shade")
     calls: list = []
-    layer = getattr(shade_module, "_light_sum")
+    layer = getattr(shade_module, "_light_terms")
 
     def counting(frame, scene, effects, normal, *args):
         # The normal is the one argument that differs between the shader-cost layers (batched
@@ -38,7 +38,7 @@ def _counted(monkeypatch):
                            normal[0][0])
         return layer(frame, scene, effects, normal, *args)
 
-    monkeypatch.setattr(shade_module, "_light_sum", counting)
+    monkeypatch.setattr(shade_module, "_light_terms", counting)
     return calls
 
 
