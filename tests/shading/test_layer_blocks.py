@@ -1,6 +1,7 @@
 """The shader-cost layers in blocks (``shade.layer_sum``): a launch whose layers x lanes exceed
 ``LAYER_LANES`` evaluates its layers in a loop of blocks, each layer exactly once, with the sum
-of the single batch, and with temporaries bounded by the block rather than by every layer."""
+of the single batch, and with temporaries bounded by the block rather than by every layer; and
+the layered shader is the plain shader averaged over the layers' nudged normals."""
 
 from __future__ import annotations
 
