@@ -89,12 +89,18 @@ def test_a_costly_launch_shades_the_same_in_blocks_with_bounded_temporaries(monk
     assert t_blocks * 4 < t_one, (t_blocks, t_one)
 
 
+def _tangent_off_normal(pts) -> np.ndarray:
+    """float64[N, 3]: each point's tangent less its component along the shading normal."""
+    n = np.asarray(pts.shading_normal, np.float64)
+    tan = np.asarray(pts.tangent, np.float64)[:, :3]
+    return tan - n * np.sum(n * tan, axis=1, keepdims=True)
+
+
 def _nudged_normals(pts, n_layers: int) -> np.ndarray:
     """float64[layers, N, 3]: the layers' normals by their definition, normalize(n + a t),
     t the unit tangent made perpendicular to n, a spread over (-LAYER_NUDGE/2, LAYER_NUDGE/2)."""
     n = np.asarray(pts.shading_normal, np.float64)
-    tan = np.asarray(pts.tangent, np.float64)[:, :3]
-    t = tan - n * np.sum(n * tan, axis=1, keepdims=True)
+    t = _tangent_off_normal(pts)
     t /= np.linalg.norm(t, axis=1, keepdims=True)
     angles = SHADE_MODULE.LAYER_NUDGE * ((np.arange(n_layers) + 0.5) / n_layers - 0.5)
     nudged = n[None] + angles[:, None, None] * t[None]
@@ -116,10 +122,7 @@ def test_the_layers_average_the_shader_over_nudged_normals(scene_name):
     pts = jax.jit(surface_points)(plain, plain.camera, jnp.asarray(tri), jnp.asarray(bary),
                                   jnp.asarray(zeros), jnp.asarray(zeros))
     # Points whose tangent is (nearly) parallel to their normal have no nudge direction.
-    tan = np.asarray(pts.tangent)[:, :3]
-    sn = np.asarray(pts.shading_normal)
-    perp = np.linalg.norm(tan - sn * np.sum(sn * tan, 1, keepdims=True), axis=1)
-    keep = np.asarray(pts.valid) & (perp > 1e-2)
+    keep = np.asarray(pts.valid) & (np.linalg.norm(_tangent_off_normal(pts), axis=1) > 1e-2)
     assert keep.sum() > n // 2, keep.sum()
     costly = with_shader_cost(plain, cost)
     got = np.asarray(jax.jit(shade)(pts, costly))
