@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Forty-first session. Call 1 (carry [".whl", ".v/base"]; .v/base is `git archive f74db23
+# jaxrender`, the tree before the fortieth session's shader-cost layers summed in one kernel):
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_forty_first.sh laybase fitsall
+# laybase: deferred and DACS on foliage at costs 0 and 256 in the base tree (8-frame pans), as
+#   gpu_fortieth.sh's layfits. fitsall: every real-time pipeline and the visibility pass on
+#   foliage at costs 0 and 256 in this tree: the fixed costs and slopes of issue 23 after the
+#   layers were fused. Predicted (fortieth session, from the offline H100 programs): deferred's
+#   slope 2-5x lower than base's; DACS's per-point slope nearer deferred's (its 80 extra
+#   launches at cost 256 fall to about 15), the ratio perhaps not lower as deferred's falls
+#   too; checkerboard's and DACS's crossovers against deferred rise.
+. "$(dirname "$0")/gpu_env.sh"
+for part in $(targets_first "$*"); do
+  if [ "$part" = laybase ]; then
+    NO_AUTO_TARGETS=1 LAY_CFGS=base OUT=$OUT bash benchmarks/gpu_fortieth.sh layfits
+  elif [ "$part" = fitsall ]; then
+    time_work fitsall "${FITS_LIMIT:-400}" --scenes foliage --pipelines ${FITS_PIPES:-visibility \
+      deferred dacs checkerboard visbuffer tads forward object_space} --costs 0 256 --frames 8 \
+      --repeats 3 --budget "$(( ${FITS_LIMIT:-400} - 20 ))" --label after
+  elif [ "$part" = targets ] || [ "$part" = ten1 ] || [ "$part" = ten2 ]; then
+    NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_eighth.sh "$part"
+  else
+    NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_fortieth.sh "$part"
+  fi
+  bundle_out
+done
+exit 0
