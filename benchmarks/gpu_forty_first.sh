@@ -9,6 +9,13 @@
 #   slope 2-5x lower than base's; DACS's per-point slope nearer deferred's (its 80 extra
 #   launches at cost 256 fall to about 15), the ratio perhaps not lower as deferred's falls
 #   too; checkerboard's and DACS's crossovers against deferred rise.
+# Call 2 (carry [".whl", ".v/pre39"]; .v/pre39 is `git archive 07ab04a jaxrender`), on an H200:
+#   bash benchmarks/gpu_forty_first.sh refprof (targets first); on an H100:
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_forty_first.sh untimed refprof
+# refprof: the 64-sample reference on terrain and foliage, kernels by scope (one frame a call):
+#   where its 37-39 ms go (H100, twenty-seventh session) against issue 23's 25. The offline
+#   H100 program streams about 4 GB a pass of 8 samples (32 GB, ~10 ms a frame at 3.35 TB/s),
+#   so most of the frame is not its large buffers' traffic. untimed: as gpu_thirty_ninth.sh's.
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = laybase ]; then
@@ -17,8 +24,13 @@ for part in $(targets_first "$*"); do
     time_work fitsall "${FITS_LIMIT:-400}" --scenes foliage --pipelines ${FITS_PIPES:-visibility \
       deferred dacs checkerboard visbuffer tads forward object_space} --costs 0 256 --frames 8 \
       --repeats 3 --budget "$(( ${FITS_LIMIT:-400} - 20 ))" --label after
+  elif [ "$part" = refprof ]; then
+    prof reference terrain 150 raster shade resolve coverage reconstruct
+    prof reference foliage 150 raster shade resolve coverage alpha reconstruct
   elif [ "$part" = targets ] || [ "$part" = ten1 ] || [ "$part" = ten2 ]; then
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_eighth.sh "$part"
+  elif [ "$part" = untimed ]; then
+    NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_thirty_ninth.sh untimed
   else
     NO_AUTO_TARGETS=1 OUT=$OUT bash benchmarks/gpu_fortieth.sh "$part"
   fi

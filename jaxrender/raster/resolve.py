@@ -95,19 +95,33 @@ def _from_rows(rows: list, x: Array, y: Array, width: int, height: int):
 
 def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int, offset_px: Array):
     """Barycentrics and d/dx, d/dy for int32[H, W] triangle ids (-1: empty, all zeros) at the
-    sample point ``offset_px`` inside each pixel.
-
-    The adjugate is computed once per triangle and its nine entries gathered per pixel as
-    separate columns: on XLA CPU the per-pixel gather of 3 x 4 vertex floats through ``faces``
-    is a materialised slice gather, slow; the arithmetic is the same as ``barycentrics_at``'s."""
-    covered = tri >= 0
+    sample point ``offset_px`` inside each pixel."""
     x = jnp.broadcast_to(jnp.arange(width, dtype=jnp.float32)[None, :] + offset_px[0],
                          (height, width))
     y = jnp.broadcast_to(jnp.arange(height, dtype=jnp.float32)[:, None] + offset_px[1],
                          (height, width))
+    return barycentrics_from_rows(triangle_rows(clip, faces), tri, x, y, width, height)
+
+
+def triangle_rows(clip: Array, faces: Array) -> list:
+    """The nine adjugate entries of every triangle, as ``adjugate_rows`` gives them, each
+    float32[T]: computed once, gathered per point by ``barycentrics_from_rows``."""
+    return adjugate_rows(clip[faces])
+
+
+def barycentrics_from_rows(rows: list, tri: Array, x: Array, y: Array, width: int,
+                           height: int):
+    """``barycentrics_at``'s barycentrics and d/dx, d/dy (zeros where ``tri`` is -1) at window
+    points x, y (float32, ``tri``'s shape), from ``triangle_rows``'s entries.
+
+    The entries are gathered per point as separate columns: on XLA CPU the per-point gather of
+    3 x 4 vertex floats through ``faces`` is a materialised slice gather, slow. ``barycentrics``
+    is this at every pixel; the reference calls it per shaded sample, so that no sample's
+    barycentrics are stored between its visibility and its shading."""
+    covered = tri >= 0
     t = jnp.maximum(tri, 0)
-    rows = [tuple(col[t] for col in r) for r in adjugate_rows(clip[faces])]
-    bary, ddx, ddy, _ = _from_rows(rows, x, y, width, height)
+    bary, ddx, ddy, _ = _from_rows([tuple(col[t] for col in r) for r in rows], x, y, width,
+                                   height)
     c = covered[..., None]
     return jnp.where(c, bary, 0.0), jnp.where(c, ddx, 0.0), jnp.where(c, ddy, 0.0)
 
