@@ -30,27 +30,14 @@ def resolve(
 def decode_keys(zbuf: Array, width: int, height: int) -> tuple[Array, Array]:
     """zbuf int64[H*W] of packed (depth, id) keys -> (tri_id int32[H, W], -1 where empty;
     depth float32[H, W], 1.0 where empty)."""
-    empty = zbuf == EMPTY_KEY
-    tri = jnp.where(empty, -1, (zbuf & 0xFFFFFFFF).astype(jnp.int32)).reshape(height, width)
+    # EMPTY_KEY compared half by half, in int32: the whole key compared would broadcast it at
+    # the buffer's size, XLA would merge that with the buffer's initial fill, and the fill, now
+    # read twice, would be copied before the depth test scatters into it.
+    tri = (zbuf & 0xFFFFFFFF).astype(jnp.int32)  # -1 where empty: EMPTY_KEY's low half
     depth_bits = (zbuf >> 32).astype(jnp.int32)
+    empty = (depth_bits == EMPTY_KEY >> 32) & (tri == -1)
     depth = jnp.where(empty, 1.0, jax.lax.bitcast_convert_type(depth_bits, jnp.float32))
-    return tri, depth.reshape(height, width)
-
-
-def barycentrics_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, width: int,
-                    height: int):
-    """Perspective-correct barycentrics [..., 3] and their derivatives per pixel (right, down)
-    at window points (x, y) (float32, any shape, pixel centres at +0.5) of valid triangles
-    ``tri`` (int32, same shape). Clamped into the triangle and renormalised; where the point's
-    homogeneous weights vanish the barycentrics are 1/3 and the derivatives 0. Returns
-    (bary, d/dx, d/dy, ok).
-
-    Written as explicit scalar algebra on the nine gathered (x, y, w) values so that XLA fuses
-    it into one pass.
-    """
-    verts = clip[faces[tri]]  # [..., 3, 4]
-    rows = adjugate_rows(verts)
-    return _from_rows(rows, x, y, width, height)
+    return tri.reshape(height, width), depth.reshape(height, width)
 
 
 def adjugate_rows(verts: Array) -> list:
@@ -68,7 +55,13 @@ def adjugate_rows(verts: Array) -> list:
     return rows
 
 
-def _from_rows(rows: list, x: Array, y: Array, width: int, height: int):
+def _column_barycentrics(rows: list, x: Array, y: Array, width: int, height: int):
+    """Perspective-correct barycentrics and their derivatives per pixel (right, down) at window
+    points (x, y) (float32, any shape, pixel centres at +0.5), from the adjugate entries
+    ``rows`` of each point's triangle: (bary, d/dx, d/dy), each a tuple of three columns.
+    Clamped into the triangle and renormalised; where the point's homogeneous weights vanish
+    the barycentrics are 1/3 and the derivatives 0. Explicit scalar algebra on the nine
+    entries, so that XLA fuses it into one pass."""
     u = x * (2.0 / width) - 1.0
     v = 1.0 - y * (2.0 / height)
     ru = [r[0] for r in rows]
@@ -83,14 +76,10 @@ def _from_rows(rows: list, x: Array, y: Array, width: int, height: int):
     bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
     norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
     third = jnp.float32(1.0 / 3.0)
-    bary = jnp.stack([jnp.where(ok, bi / norm, third) for bi in bc], axis=-1)
-    ddx = jnp.stack(
-        [jnp.where(ok, (ru[i] - b[i] * su) / s * (2.0 / width), 0.0) for i in range(3)], -1
-    )
-    ddy = jnp.stack(
-        [jnp.where(ok, (rv[i] - b[i] * sv) / s * (-2.0 / height), 0.0) for i in range(3)], -1
-    )
-    return bary, ddx, ddy, ok
+    bary = tuple(jnp.where(ok, bi / norm, third) for bi in bc)
+    ddx = tuple(jnp.where(ok, (ru[i] - b[i] * su) / s * (2.0 / width), 0.0) for i in range(3))
+    ddy = tuple(jnp.where(ok, (rv[i] - b[i] * sv) / s * (-2.0 / height), 0.0) for i in range(3))
+    return bary, ddx, ddy
 
 
 def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int, offset_px: Array):
@@ -100,7 +89,8 @@ def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int,
                          (height, width))
     y = jnp.broadcast_to(jnp.arange(height, dtype=jnp.float32)[:, None] + offset_px[1],
                          (height, width))
-    return barycentrics_from_rows(triangle_rows(clip, faces), tri, x, y, width, height)
+    columns = barycentrics_from_rows(triangle_rows(clip, faces), tri, x, y, width, height)
+    return tuple(jnp.stack(v, axis=-1) for v in columns)
 
 
 def triangle_rows(clip: Array, faces: Array) -> list:
@@ -111,19 +101,20 @@ def triangle_rows(clip: Array, faces: Array) -> list:
 
 def barycentrics_from_rows(rows: list, tri: Array, x: Array, y: Array, width: int,
                            height: int):
-    """``barycentrics_at``'s barycentrics and d/dx, d/dy (zeros where ``tri`` is -1) at window
-    points x, y (float32, ``tri``'s shape), from ``triangle_rows``'s entries.
+    """Perspective-correct barycentrics and d/dx, d/dy (zeros where ``tri`` is -1) of triangles
+    ``tri`` at window points x, y (float32, ``tri``'s shape), from ``triangle_rows``'s
+    entries, each of the three as a tuple of its three columns (``surface.surface_points``
+    takes them so).
 
     The entries are gathered per point as separate columns: on XLA CPU the per-point gather of
-    3 x 4 vertex floats through ``faces`` is a materialised slice gather, slow. ``barycentrics``
-    is this at every pixel; the reference calls it per shaded sample, so that no sample's
-    barycentrics are stored between its visibility and its shading."""
+    3 x 4 vertex floats through ``faces`` is a materialised slice gather, slow. Left as
+    columns, the values fuse into the kernels that use them: stacked, the [N, 3] arrays were
+    stored between their computation and their use (the reference's passes, 1.2 GB at 1080p)."""
     covered = tri >= 0
     t = jnp.maximum(tri, 0)
-    bary, ddx, ddy, _ = _from_rows([tuple(col[t] for col in r) for r in rows], x, y, width,
-                                   height)
-    c = covered[..., None]
-    return jnp.where(c, bary, 0.0), jnp.where(c, ddx, 0.0), jnp.where(c, ddy, 0.0)
+    bary, ddx, ddy = _column_barycentrics([tuple(col[t] for col in r) for r in rows], x, y,
+                                          width, height)
+    return tuple(tuple(jnp.where(covered, c, 0.0) for c in v) for v in (bary, ddx, ddy))
 
 
 def pair_barycentrics(clip: Array, faces: Array, tri: Array, px: Array, py: Array,
@@ -131,7 +122,7 @@ def pair_barycentrics(clip: Array, faces: Array, tri: Array, px: Array, py: Arra
     """Perspective-correct barycentrics of triangle ``tri`` int32[N] at the sample point
     (px + ox, py + oy) of pixels px, py int32[N], and their d/dx, d/dy (per pixel right / down).
 
-    The same homogeneous (Olano-Greer) formulation as ``barycentrics_at``, for a flat list of
+    The same homogeneous (Olano-Greer) formulation as ``barycentrics``, for a flat list of
     (triangle, pixel) pairs whose point may lie outside the triangle (quad helper lanes, chunk
     neighbours): there the barycentrics are extrapolated, unclamped, so the rows are scaled to
     a unit maximum first to keep the products in range. Returns three float32[N, 3].

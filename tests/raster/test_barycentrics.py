@@ -4,7 +4,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrender.raster import rasterize
-from jaxrender.raster.resolve import barycentrics
+from jaxrender.raster.resolve import barycentrics, barycentrics_from_rows, triangle_rows
 from jaxrender.scene.mesh import closed_uv_sphere
 from jaxrender.scene.camera import look_at, world_to_clip
 from tests.raster.conftest import pad
@@ -61,3 +61,49 @@ def test_derivatives_match_central_differences(rng):
         np.asarray(vis.dbary_dy)[interior], fd_y[interior], atol=2e-3 * scale, err_msg="d/dy"
     )
     np.testing.assert_allclose(b[np.asarray(tri) >= 0].sum(-1), 1.0, atol=1e-5)
+
+
+def test_barycentrics_at_sub_pixel_points_match_the_projected_triangle(rng):
+    # barycentrics_from_rows (the reference's per-sample barycentrics) against a float64 oracle
+    # of another construction: the screen-space barycentrics of the projected triangle, each
+    # divided by its vertex's w and renormalised, at random points inside covered pixels.
+    v, f, cam = _scene(rng)
+    vis = rasterize(v, f, cam, W, H)
+    clip = world_to_clip(jnp.asarray(v), cam, W / H)
+    tri = np.array(vis.tri_id).reshape(-1)
+    tri[rng.choice(tri.size, 40, replace=False)] = -1  # uncovered points: zeros
+    ys, xs = np.divmod(np.arange(tri.size), W)
+    x = (xs + rng.uniform(0.0, 1.0, tri.size)).astype(np.float32)
+    y = (ys + rng.uniform(0.0, 1.0, tri.size)).astype(np.float32)
+    columns = barycentrics_from_rows(triangle_rows(clip, jnp.asarray(f)), jnp.asarray(tri),
+                                     jnp.asarray(x), jnp.asarray(y), W, H)
+    bary, ddx, ddy = (np.stack([np.asarray(c, np.float64) for c in v3], -1) for v3 in columns)
+
+    c = np.asarray(clip, np.float64)[f[np.maximum(tri, 0)]]  # [N, 3, 4]
+    sx = (c[..., 0] / c[..., 3] + 1.0) * W / 2
+    sy = (1.0 - c[..., 1] / c[..., 3]) * H / 2
+
+    def oracle(qx, qy):  # (screen-space, perspective-correct) barycentrics, float64
+        edge = [(1, 2), (2, 0), (0, 1)]
+        s = np.stack([(sx[:, j] - sx[:, i]) * (qy - sy[:, i]) - (sy[:, j] - sy[:, i])
+                      * (qx - sx[:, i]) for i, j in edge], -1)
+        s = s / s.sum(-1, keepdims=True)
+        p = s / c[..., 3]
+        return s, p / p.sum(-1, keepdims=True)
+
+    px, py = x.astype(np.float64), y.astype(np.float64)
+    screen, persp = oracle(px, py)
+    inside = (tri >= 0) & np.all(screen > 1e-3, axis=-1)  # points off the triangle are clamped
+    assert inside.sum() > 500, inside.sum()
+    np.testing.assert_allclose(bary[inside], persp[inside], atol=2e-5,
+                               err_msg="barycentrics at sub-pixel points")
+    assert np.all(bary[tri < 0] == 0) and np.all(ddx[tri < 0] == 0) and np.all(ddy[tri < 0] == 0)
+    # The derivatives against central differences of the oracle, a sub-pixel step each way,
+    # where the step stays inside the triangle.
+    h = 1.0 / 64.0
+    fd_x = (oracle(px + h, py)[1] - oracle(px - h, py)[1]) / (2 * h)
+    fd_y = (oracle(px, py + h)[1] - oracle(px, py - h)[1]) / (2 * h)
+    deep = inside & np.all(screen > 0.05, axis=-1)
+    scale = np.abs(fd_x[deep]).max()
+    np.testing.assert_allclose(ddx[deep], fd_x[deep], atol=1e-3 * scale, err_msg="d/dx")
+    np.testing.assert_allclose(ddy[deep], fd_y[deep], atol=1e-3 * scale, err_msg="d/dy")
