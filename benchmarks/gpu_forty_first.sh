@@ -16,6 +16,17 @@
 #   where its 37-39 ms go (H100, twenty-seventh session) against issue 23's 25. The offline
 #   H100 program streams about 4 GB a pass of 8 samples (32 GB, ~10 ms a frame at 3.35 TB/s),
 #   so most of the frame is not its large buffers' traffic. untimed: as gpu_thirty_ninth.sh's.
+# Prepared later in the session (no device came; carry [".whl", ".v/b41"], .v/b41 is
+# `git archive 46405b1 jaxrender`, the tree before the barycentrics as columns):
+#   NO_AUTO_TARGETS=1 bash benchmarks/gpu_forty_first.sh cols refab
+# cols: forward and deferred on glass, b41 against this tree (A B B A): the pairs'
+#   barycentrics as columns (offline H100 programs: forward 681 -> 600 launching
+#   instructions, its shading block of 2^20 lanes writes about 50 MB where it wrote 130, the
+#   transparent layers' branches about half). Predicted: forward on glass 0.15-0.3 ms a frame
+#   faster, deferred 0.05-0.15.
+# refab: the 64-sample reference on terrain, foliage and room (2-frame pans), b41 against this
+#   tree: the samples' barycentrics as columns, stored nowhere, and the depth buffer's fill
+#   no longer copied (a pass of 8 samples writes 0.7-1.2 GB less). Predicted 6-13% faster.
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = laybase ]; then
@@ -24,6 +35,14 @@ for part in $(targets_first "$*"); do
     time_work fitsall "${FITS_LIMIT:-400}" --scenes foliage --pipelines ${FITS_PIPES:-visibility \
       deferred dacs checkerboard visbuffer tads forward object_space} --costs 0 256 --frames 8 \
       --repeats 3 --budget "$(( ${FITS_LIMIT:-400} - 20 ))" --label after
+  elif [ "$part" = cols ]; then
+    cached_compiles
+    S=$S8
+    side_by_side cols 150 "b41 after" --scenes glass --pipelines forward deferred
+  elif [ "$part" = refab ]; then
+    cached_compiles
+    S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
+    side_by_side refab 140 "b41 after" --scenes terrain foliage room --pipelines reference
   elif [ "$part" = refprof ]; then
     prof reference terrain 150 raster shade resolve coverage reconstruct
     prof reference foliage 150 raster shade resolve coverage alpha reconstruct

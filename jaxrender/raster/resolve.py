@@ -10,10 +10,11 @@ behind the eye resolves exactly like any other, and the derivatives follow by th
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 
-from jaxrender.fusion import all_small, max_small, sum_small
 from jaxrender.raster.work_items import EMPTY_KEY
 from jaxrender.types import Array, VisBuffer
 
@@ -119,37 +120,45 @@ def barycentrics_from_rows(rows: list, tri: Array, x: Array, y: Array, width: in
 
 def pair_barycentrics(clip: Array, faces: Array, tri: Array, px: Array, py: Array,
                       width: int, height: int, offset=(0.5, 0.5)):
+    """``pair_barycentric_columns`` with each of its three results stacked: float32[N, 3]."""
+    columns = pair_barycentric_columns(clip, faces, tri, px, py, width, height, offset)
+    return tuple(jnp.stack(v, axis=-1) for v in columns)
+
+
+def pair_barycentric_columns(clip: Array, faces: Array, tri: Array, px: Array, py: Array,
+                             width: int, height: int, offset=(0.5, 0.5)):
     """Perspective-correct barycentrics of triangle ``tri`` int32[N] at the sample point
-    (px + ox, py + oy) of pixels px, py int32[N], and their d/dx, d/dy (per pixel right / down).
+    (px + ox, py + oy) of pixels px, py int32[N], and their d/dx, d/dy (per pixel right / down),
+    each as a tuple of three float32[N] columns (``surface.surface_points`` takes them so:
+    left as columns they fuse into the kernels that use them, where stacked they were stored).
 
     The same homogeneous (Olano-Greer) formulation as ``barycentrics``, for a flat list of
     (triangle, pixel) pairs whose point may lie outside the triangle (quad helper lanes, chunk
     neighbours): there the barycentrics are extrapolated, unclamped, so the rows are scaled to
-    a unit maximum first to keep the products in range. Returns three float32[N, 3].
+    a unit maximum first to keep the products in range.
     """
-    verts = clip[faces[jnp.maximum(tri, 0)]]  # [N, 3, 4]
-    c = jnp.stack([verts[..., 0], verts[..., 1], verts[..., 3]], axis=-1)  # [N, 3, 3]
-    rows = jnp.stack([jnp.cross(c[:, 1], c[:, 2]), jnp.cross(c[:, 2], c[:, 0]),
-                      jnp.cross(c[:, 0], c[:, 1])], axis=-2)
-    scale = max_small(jnp.abs(rows), (-2, -1))
-    rows = rows / jnp.where(scale > 0, scale, 1.0)
+    rows = adjugate_rows(clip[faces[jnp.maximum(tri, 0)]])
+    scale = functools.reduce(jnp.maximum, [jnp.abs(e) for row in rows for e in row])
+    scale = jnp.where(scale > 0, scale, 1.0)
+    rows = [tuple(e / scale for e in row) for row in rows]
     u = (px.astype(jnp.float32) + offset[0]) * (2.0 / width) - 1.0
     v = 1.0 - (py.astype(jnp.float32) + offset[1]) * (2.0 / height)
-    e = rows[..., 0] * u[:, None] + rows[..., 1] * v[:, None] + rows[..., 2]
-    s = sum_small(e, keepdims=True)
-    ok = (tri >= 0)[:, None] & (s != 0.0)
+    e = [a * u + b * v + c for a, b, c in rows]
+    s = e[0] + e[1] + e[2]
+    covered = tri >= 0
+    ok = covered & (s != 0.0)
     s = jnp.where(ok, s, 1.0)
-    b = e / s
-    db_du = (rows[..., 0] - b * sum_small(rows[..., 0], keepdims=True)) / s
-    db_dv = (rows[..., 1] - b * sum_small(rows[..., 1], keepdims=True)) / s
-    inside = all_small(b >= 0.0)[:, None]
+    b = [ei / s for ei in e]
+    su = rows[0][0] + rows[1][0] + rows[2][0]
+    sv = rows[0][1] + rows[1][1] + rows[2][1]
+    db_du = [(row[0] - bi * su) / s for row, bi in zip(rows, b)]
+    db_dv = [(row[1] - bi * sv) / s for row, bi in zip(rows, b)]
+    inside = (b[0] >= 0.0) & (b[1] >= 0.0) & (b[2] >= 0.0)
     # Inside the triangle clamp a rounding error away, as resolve does; outside extrapolate.
-    bc = jnp.clip(b, 0.0, 1.0)
-    bc = bc / jnp.maximum(sum_small(bc, keepdims=True), 1e-30)
-    b = jnp.where(inside, bc, b)
-    zero = jnp.zeros_like(b)
-    third = jnp.full_like(b, 1.0 / 3.0)
-    bary = jnp.where(ok, b, jnp.where((tri >= 0)[:, None], third, zero))
-    ddx = jnp.where(ok, db_du * (2.0 / width), zero)
-    ddy = jnp.where(ok, db_dv * (-2.0 / height), zero)
-    return bary, ddx, ddy
+    bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
+    norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
+    b = [jnp.where(inside, ci / norm, bi) for ci, bi in zip(bc, b)]
+    third = jnp.where(covered, jnp.float32(1.0 / 3.0), 0.0)
+    return (tuple(jnp.where(ok, bi, third) for bi in b),
+            tuple(jnp.where(ok, d * (2.0 / width), 0.0) for d in db_du),
+            tuple(jnp.where(ok, d * (-2.0 / height), 0.0) for d in db_dv))
