@@ -44,8 +44,9 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
                    dbary_dy: Array) -> SurfacePoints:
     """A flat batch of N points: tri_id int32[N] (-1 = none), bary/dbary_dx/dbary_dy float32[N, 3]
     (perspective-correct barycentrics and their derivatives per pixel right / down), or each
-    a tuple of its three float32[N] columns (``resolve.barycentrics_from_rows``'s, computed in
-    the same program: as columns they fuse into the kernels that use them, never stored).
+    a tuple of its three float32[N] columns (``resolve.barycentrics_from_rows``'s and
+    ``resolve.pair_barycentric_columns``'s: computed in the same program, columns fuse into
+    the kernels that use them, where XLA stored the stacked arrays between the two).
 
     Position, normal, uv and tangent are interpolated with ``bary``; uv derivatives follow by
     the chain rule, duv/dx = sum_i dbary_i/dx * uv_i. The geometric normal (of the triangle) and
