@@ -19,11 +19,12 @@
 # Prepared later in the session (no device came; carry [".whl", ".v/b41"], .v/b41 is
 # `git archive 46405b1 jaxrender`, the tree before the barycentrics as columns):
 #   NO_AUTO_TARGETS=1 bash benchmarks/gpu_forty_first.sh cols refab
-# cols: forward and deferred on glass, b41 against this tree (A B B A): the pairs'
+# cols: forward, deferred and object space on glass, b41 against this tree (A B B A): the pairs'
 #   barycentrics as columns (offline H100 programs: forward 681 -> 600 launching
 #   instructions, its shading block of 2^20 lanes writes about 50 MB where it wrote 130, the
 #   transparent layers' branches about half). Predicted: forward on glass 0.15-0.3 ms a frame
-#   faster, deferred 0.05-0.15.
+#   faster, deferred 0.05-0.15; object space (its shadels' barycentrics as columns too: 943 ->
+#   913 launching instructions) 0.03-0.1.
 # refab: the 64-sample reference on terrain, foliage and room (2-frame pans), b41 against this
 #   tree: the samples' barycentrics as columns, stored nowhere, and the depth buffer's fill
 #   no longer copied (a pass of 8 samples writes 0.7-1.2 GB less). Predicted 6-13% faster.
@@ -38,7 +39,7 @@ for part in $(targets_first "$*"); do
   elif [ "$part" = cols ]; then
     cached_compiles
     S=$S8
-    side_by_side cols 150 "b41 after" --scenes glass --pipelines forward deferred
+    side_by_side cols 200 "b41 after" --scenes glass --pipelines forward deferred object_space
   elif [ "$part" = refab ]; then
     cached_compiles
     S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
