@@ -166,25 +166,24 @@ def prepare(scene, cfg: ObjectSpaceConfig) -> ShadeSheet:
 # ---------------------------------------------------------------- shadel -> surface point
 
 
-def shadel_barycentrics(corner: Array, p: tuple, eps: float):
-    """Barycentrics of chart points p = (s, t), each float32[N], in chart triangles corner
-    float32[N, 3, 2], clamped to [-eps, 1 + eps] (then shifted to sum to 1), and their d/ds,
-    d/dt: each of the three a tuple of three float32[N] columns, which ``surface_points``
-    takes as they are (stacked, XLA stored them between the two)."""
-    (ax, ay), (bx, by), (cx, cy) = ((corner[:, i, 0], corner[:, i, 1]) for i in range(3))
-    v0x, v0y, v1x, v1y = bx - ax, by - ay, cx - ax, cy - ay
-    dx, dy = p[0] - ax, p[1] - ay
-    det = v0x * v1y - v0y * v1x
+def shadel_barycentrics(corner: Array, p: Array, eps: float):
+    """Barycentrics of chart points p float32[N, 2] in chart triangles corner float32[N, 3, 2],
+    clamped to [-eps, 1 + eps] (then shifted to sum to 1), and their d/ds, d/dt."""
+    a, b, c = corner[:, 0], corner[:, 1], corner[:, 2]
+    v0, v1, d = b - a, c - a, p - a
+    det = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
     ok = jnp.abs(det) > 1e-20
     inv = jnp.where(ok, 1.0 / jnp.where(ok, det, 1.0), 0.0)
-    b1 = (dx * v1y - dy * v1x) * inv
-    b2 = (v0x * dy - v0y * dx) * inv
-    bary = [jnp.clip(b, -eps, 1.0 + eps) for b in (1.0 - b1 - b2, b1, b2)]
-    shift = (1.0 - (bary[0] + bary[1] + bary[2])) / 3.0
-    bary = tuple(jnp.where(ok, b + shift, jnp.float32(1.0 / 3.0)) for b in bary)
-    d1 = (v1y * inv, -v1x * inv)  # d b1 / d(s, t)
-    d2 = (-v0y * inv, v0x * inv)
-    return (bary, (-(d1[0] + d2[0]), d1[0], d2[0]), (-(d1[1] + d2[1]), d1[1], d2[1]))
+    b1 = (d[:, 0] * v1[:, 1] - d[:, 1] * v1[:, 0]) * inv
+    b2 = (v0[:, 0] * d[:, 1] - v0[:, 1] * d[:, 0]) * inv
+    bary = jnp.stack([1.0 - b1 - b2, b1, b2], axis=-1)
+    bary = jnp.clip(bary, -eps, 1.0 + eps)
+    bary = bary + (1.0 - jnp.sum(bary, axis=-1, keepdims=True)) / 3.0
+    bary = jnp.where(ok[:, None], bary, jnp.float32(1.0 / 3.0))
+    d1 = jnp.stack([v1[:, 1], -v1[:, 0]], -1) * inv[:, None]  # d b1 / d(s, t)
+    d2 = jnp.stack([-v0[:, 1], v0[:, 0]], -1) * inv[:, None]
+    dst = jnp.stack([-(d1 + d2), d1, d2], axis=1)  # [N, 3, 2]
+    return bary, dst[..., 0], dst[..., 1]
 
 
 def shadel_points(scene, camera, sheet: ShadeSheet, slot_chunk: Array, items: Array, eps: float):
@@ -197,10 +196,9 @@ def shadel_points(scene, camera, sheet: ShadeSheet, slot_chunk: Array, items: Ar
     rl = jnp.right_shift(sheet.obj_res[obj], lvl).astype(jnp.float32)
     x = (sheet.chunk_cx[v] * CHUNK + lane % CHUNK).astype(jnp.float32)
     y = (sheet.chunk_cy[v] * CHUNK + lane // CHUNK).astype(jnp.float32)
-    bary, dbds, dbdt = shadel_barycentrics(sheet.corner_st[jnp.maximum(tri, 0)],
-                                           ((x + 0.5) / rl, (y + 0.5) / rl), eps)
-    return surface_points(scene, camera, tri, bary, tuple(c / rl for c in dbds),
-                          tuple(c / rl for c in dbdt))
+    p = jnp.stack([(x + 0.5) / rl, (y + 0.5) / rl], axis=-1)
+    bary, dbds, dbdt = shadel_barycentrics(sheet.corner_st[jnp.maximum(tri, 0)], p, eps)
+    return surface_points(scene, camera, tri, bary, dbds / rl[:, None], dbdt / rl[:, None])
 
 
 # ---------------------------------------------------------------- one frame
