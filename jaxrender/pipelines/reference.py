@@ -37,7 +37,7 @@ from jaxrender.pipelines.vertex_work import vertex_counts
 from jaxrender.pipelines.visibility import is_alpha_tested, opaque_faces
 from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
                                         sample_visibility)
-from jaxrender.raster.resolve import barycentrics_from_rows, triangle_rows
+from jaxrender.raster.resolve import barycentrics_at, barycentrics_from_rows, triangle_rows
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.camera import Camera, world_to_clip
 from jaxrender.scene.scene import Scene
@@ -97,20 +97,14 @@ class ReferenceConfig(RenderConfig):
 ALPHA_CHUNKS = 4
 
 
-def _sample_points(scene: Scene, camera: Camera, rows: list, tri: Array, x: Array, y: Array,
-                   inv_k: Array, w: int, h: int):
-    """Surface points of triangles ``tri`` at window points x, y, each with the footprint of
-    one sample (the barycentrics' derivatives per pixel times 1/k). The barycentrics are
-    computed here, as columns, so that they fuse into the kernels that use them: stored, as
-    the pass's visibility buffers stored them, they were 36 bytes a sample written and read
-    again (1.2 GB a pass of 8 samples at 1080p)."""
-    b, ddx, ddy = barycentrics_from_rows(rows, tri, x, y, w, h)
-    return surface_points(scene, camera, tri, b, tuple(c * inv_k for c in ddx),
-                          tuple(c * inv_k for c in ddy))
+def _bary_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, w: int, h: int):
+    """Barycentrics and their per-pixel derivatives at window points: the rasterizer's own."""
+    bary, ddx, ddy, _ = barycentrics_at(tri, x, y, clip, faces, w, h)
+    return bary, ddx, ddy
 
 
-def _visibility(scene: Scene, camera: Camera, clip: Array, rows: list, offsets: Array,
-                live: Array, cfg, inv_k: Array):
+def _visibility(scene: Scene, camera: Camera, clip: Array, offsets: Array, live: Array, cfg,
+                inv_k: Array):
     """DepthBuffers [S, H, W] (ids and depths) of S samples at the traced fixed-point offsets
     int32[S, 2], in one traversal; fragments failing the alpha test are discarded before the
     depth test. Returns (vis, counts)."""
@@ -132,7 +126,8 @@ def _visibility(scene: Scene, camera: Camera, clip: Array, rows: list, offsets: 
             tri = c.tri[i]
             x = c.px[i].astype(jnp.float32) + off_px[s, 0]
             y = c.py[i].astype(jnp.float32) + off_px[s, 1]
-            return _sample_points(scene, camera, rows, tri, x, y, inv_k, w, h)
+            b, bx, by = _bary_at(tri, x, y, clip, faces, w, h)
+            return surface_points(scene, camera, tri, b, bx * inv_k, by * inv_k)
 
         with jax.enable_x64(False):
             passed, work = dispatch.shade(
@@ -213,15 +208,19 @@ def _render(scene: Scene, camera: Camera, k: Array, cfg: ReferenceConfig) -> Fra
         offsets = _offset(jnp.where(live, s, p * n_s), k).T  # a dead sample repeats a live one
         off_px = offsets.astype(jnp.float32) / (1 << SUBPIXEL_BITS)
         with jax.named_scope("raster"):
-            vis, rc = _visibility(scene, camera, clip, rows, offsets, live, cfg, inv_k)
+            vis, rc = _visibility(scene, camera, clip, offsets, live, cfg, inv_k)
         tri = vis.tri_id.reshape(-1)
 
         def points_of(items):
-            sample = items // n_pix
+            # Each sample's barycentrics computed where it is shaded: the pass keeps ids and
+            # depths only, and a compacted launch computes its covered samples' alone.
+            t, sample = tri[items], items // n_pix
             q = items - sample * n_pix
             x = (q % w).astype(jnp.float32) + off_px[sample, 0]
             y = (q // w).astype(jnp.float32) + off_px[sample, 1]
-            return _sample_points(scene, camera, rows, tri[items], x, y, inv_k, w, h)
+            b, ddx, ddy = barycentrics_from_rows(rows, t, x, y, w, h)
+            # inv_k: the footprint of one sample, not one pixel
+            return surface_points(scene, camera, t, b, ddx * inv_k, ddy * inv_k)
 
         with jax.named_scope("shade"):
             rgb, work = _shade_samples(tri >= 0, points_of, lambda p: shade(p, scene),

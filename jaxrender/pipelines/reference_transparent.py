@@ -9,7 +9,7 @@ from jaxrender.pipelines.transparency import BlendSettings, composite, front_wor
 from jaxrender.pipelines.visibility import faces_where, is_transparent
 from jaxrender.raster.fragments import collect_fragments
 from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity
-from jaxrender.raster.resolve import pair_barycentric_columns
+from jaxrender.raster.resolve import pair_barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.shading import surface_points
 from jaxrender.types import Array
@@ -37,10 +37,9 @@ def sample_pass(scene, camera, clip, offsets: Array, live: Array, opaque_depth: 
     def points_of(items):
         t, p = fr.tri[items], fr.pixel[items]
         sample, q = p // n_pix, p % n_pix
-        b, dx, dy = pair_barycentric_columns(clip, scene.faces, t, q % w, q // w, w, h,
-                                             (off_px[sample, 0], off_px[sample, 1]))
-        return surface_points(scene, camera, t, b, tuple(c * deriv_scale for c in dx),
-                              tuple(c * deriv_scale for c in dy))
+        b, dx, dy = pair_barycentrics(clip, scene.faces, t, q % w, q // w, w, h,
+                                      (off_px[sample, 0], off_px[sample, 1]))
+        return surface_points(scene, camera, t, b, dx * deriv_scale, dy * deriv_scale)
 
     layers, work = shade_layers(scene, camera, fr, front, work, points_of,
                                 cfg.chunk or n_s * n_pix)

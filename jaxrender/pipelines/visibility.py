@@ -20,7 +20,7 @@ from jaxrender.raster.fragments import Fragments, fragments_jit
 from jaxrender.raster.motion import motion_vectors
 from jaxrender.raster.rasterize import (default_clip_capacity, default_work_capacity,
                                         rasterize_traced)
-from jaxrender.raster.resolve import barycentrics, pair_barycentric_columns
+from jaxrender.raster.resolve import barycentrics, pair_barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene.camera import Camera, world_to_clip
 from jaxrender.scene.scene import Scene
@@ -64,8 +64,7 @@ def points_at(scene: Scene, camera: Camera, clip: Array, cfg, tri: Array, pixel:
 
 
 def points_at_xy(scene, camera, clip, cfg, tri, px, py, offset=(0.5, 0.5)) -> SurfacePoints:
-    b, dx, dy = pair_barycentric_columns(clip, scene.faces, tri, px, py, cfg.width, cfg.height,
-                                         offset)
+    b, dx, dy = pair_barycentrics(clip, scene.faces, tri, px, py, cfg.width, cfg.height, offset)
     return surface_points(scene, camera, tri, b, dx, dy)
 
 

@@ -10,11 +10,10 @@ behind the eye resolves exactly like any other, and the derivatives follow by th
 
 from __future__ import annotations
 
-import functools
-
 import jax
 import jax.numpy as jnp
 
+from jaxrender.fusion import all_small, max_small, sum_small
 from jaxrender.raster.work_items import EMPTY_KEY
 from jaxrender.types import Array, VisBuffer
 
@@ -41,6 +40,22 @@ def decode_keys(zbuf: Array, width: int, height: int) -> tuple[Array, Array]:
     return tri.reshape(height, width), depth.reshape(height, width)
 
 
+def barycentrics_at(tri: Array, x: Array, y: Array, clip: Array, faces: Array, width: int,
+                    height: int):
+    """Perspective-correct barycentrics [..., 3] and their derivatives per pixel (right, down)
+    at window points (x, y) (float32, any shape, pixel centres at +0.5) of valid triangles
+    ``tri`` (int32, same shape). Clamped into the triangle and renormalised; where the point's
+    homogeneous weights vanish the barycentrics are 1/3 and the derivatives 0. Returns
+    (bary, d/dx, d/dy, ok).
+
+    Written as explicit scalar algebra on the nine gathered (x, y, w) values so that XLA fuses
+    it into one pass.
+    """
+    verts = clip[faces[tri]]  # [..., 3, 4]
+    rows = adjugate_rows(verts)
+    return _from_rows(rows, x, y, width, height)
+
+
 def adjugate_rows(verts: Array) -> list:
     """float32[..., 3, 4] clip-space vertices -> the nine adjugate entries [(a, b, c) per
     vertex], each float32[...]: row_i = c_j x c_k for (i, j, k) cyclic, c = (x, y, w)."""
@@ -56,13 +71,7 @@ def adjugate_rows(verts: Array) -> list:
     return rows
 
 
-def _column_barycentrics(rows: list, x: Array, y: Array, width: int, height: int):
-    """Perspective-correct barycentrics and their derivatives per pixel (right, down) at window
-    points (x, y) (float32, any shape, pixel centres at +0.5), from the adjugate entries
-    ``rows`` of each point's triangle: (bary, d/dx, d/dy), each a tuple of three columns.
-    Clamped into the triangle and renormalised; where the point's homogeneous weights vanish
-    the barycentrics are 1/3 and the derivatives 0. Explicit scalar algebra on the nine
-    entries, so that XLA fuses it into one pass."""
+def _from_rows(rows: list, x: Array, y: Array, width: int, height: int):
     u = x * (2.0 / width) - 1.0
     v = 1.0 - y * (2.0 / height)
     ru = [r[0] for r in rows]
@@ -77,10 +86,14 @@ def _column_barycentrics(rows: list, x: Array, y: Array, width: int, height: int
     bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
     norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
     third = jnp.float32(1.0 / 3.0)
-    bary = tuple(jnp.where(ok, bi / norm, third) for bi in bc)
-    ddx = tuple(jnp.where(ok, (ru[i] - b[i] * su) / s * (2.0 / width), 0.0) for i in range(3))
-    ddy = tuple(jnp.where(ok, (rv[i] - b[i] * sv) / s * (-2.0 / height), 0.0) for i in range(3))
-    return bary, ddx, ddy
+    bary = jnp.stack([jnp.where(ok, bi / norm, third) for bi in bc], axis=-1)
+    ddx = jnp.stack(
+        [jnp.where(ok, (ru[i] - b[i] * su) / s * (2.0 / width), 0.0) for i in range(3)], -1
+    )
+    ddy = jnp.stack(
+        [jnp.where(ok, (rv[i] - b[i] * sv) / s * (-2.0 / height), 0.0) for i in range(3)], -1
+    )
+    return bary, ddx, ddy, ok
 
 
 def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int, offset_px: Array):
@@ -90,8 +103,7 @@ def barycentrics(tri: Array, clip: Array, faces: Array, width: int, height: int,
                          (height, width))
     y = jnp.broadcast_to(jnp.arange(height, dtype=jnp.float32)[:, None] + offset_px[1],
                          (height, width))
-    columns = barycentrics_from_rows(triangle_rows(clip, faces), tri, x, y, width, height)
-    return tuple(jnp.stack(v, axis=-1) for v in columns)
+    return barycentrics_from_rows(triangle_rows(clip, faces), tri, x, y, width, height)
 
 
 def triangle_rows(clip: Array, faces: Array) -> list:
@@ -102,63 +114,57 @@ def triangle_rows(clip: Array, faces: Array) -> list:
 
 def barycentrics_from_rows(rows: list, tri: Array, x: Array, y: Array, width: int,
                            height: int):
-    """Perspective-correct barycentrics and d/dx, d/dy (zeros where ``tri`` is -1) of triangles
-    ``tri`` at window points x, y (float32, ``tri``'s shape), from ``triangle_rows``'s
-    entries, each of the three as a tuple of its three columns (``surface.surface_points``
-    takes them so).
+    """``barycentrics_at``'s barycentrics and d/dx, d/dy (zeros where ``tri`` is -1) at window
+    points x, y (float32, ``tri``'s shape), from ``triangle_rows``'s entries.
 
     The entries are gathered per point as separate columns: on XLA CPU the per-point gather of
-    3 x 4 vertex floats through ``faces`` is a materialised slice gather, slow. Left as
-    columns, the values fuse into the kernels that use them: stacked, the [N, 3] arrays were
-    stored between their computation and their use (the reference's passes, 1.2 GB at 1080p)."""
+    3 x 4 vertex floats through ``faces`` is a materialised slice gather, slow. ``barycentrics``
+    is this at every pixel; the reference calls it per shaded sample, so that its passes keep
+    ids and depths only and a compacted launch computes the barycentrics of its samples alone.
+    The three results are stacked [..., 3]: as columns XLA fused them into every kernel that
+    uses them, several times faster to store on a GPU (offline) but 1.3-10x slower on the CPU
+    (``benchmarks/variants/barycentric_columns.patch``, RESULTS.md, forty-first session)."""
     covered = tri >= 0
     t = jnp.maximum(tri, 0)
-    bary, ddx, ddy = _column_barycentrics([tuple(col[t] for col in r) for r in rows], x, y,
-                                          width, height)
-    return tuple(tuple(jnp.where(covered, c, 0.0) for c in v) for v in (bary, ddx, ddy))
+    bary, ddx, ddy, _ = _from_rows([tuple(col[t] for col in r) for r in rows], x, y, width,
+                                   height)
+    c = covered[..., None]
+    return jnp.where(c, bary, 0.0), jnp.where(c, ddx, 0.0), jnp.where(c, ddy, 0.0)
 
 
 def pair_barycentrics(clip: Array, faces: Array, tri: Array, px: Array, py: Array,
                       width: int, height: int, offset=(0.5, 0.5)):
-    """``pair_barycentric_columns`` with each of its three results stacked: float32[N, 3]."""
-    columns = pair_barycentric_columns(clip, faces, tri, px, py, width, height, offset)
-    return tuple(jnp.stack(v, axis=-1) for v in columns)
-
-
-def pair_barycentric_columns(clip: Array, faces: Array, tri: Array, px: Array, py: Array,
-                             width: int, height: int, offset=(0.5, 0.5)):
     """Perspective-correct barycentrics of triangle ``tri`` int32[N] at the sample point
-    (px + ox, py + oy) of pixels px, py int32[N], and their d/dx, d/dy (per pixel right / down),
-    each as a tuple of three float32[N] columns (``surface.surface_points`` takes them so:
-    left as columns they fuse into the kernels that use them, where stacked they were stored).
+    (px + ox, py + oy) of pixels px, py int32[N], and their d/dx, d/dy (per pixel right / down).
 
-    The same homogeneous (Olano-Greer) formulation as ``barycentrics``, for a flat list of
+    The same homogeneous (Olano-Greer) formulation as ``barycentrics_at``, for a flat list of
     (triangle, pixel) pairs whose point may lie outside the triangle (quad helper lanes, chunk
     neighbours): there the barycentrics are extrapolated, unclamped, so the rows are scaled to
-    a unit maximum first to keep the products in range.
+    a unit maximum first to keep the products in range. Returns three float32[N, 3].
     """
-    rows = adjugate_rows(clip[faces[jnp.maximum(tri, 0)]])
-    scale = functools.reduce(jnp.maximum, [jnp.abs(e) for row in rows for e in row])
-    scale = jnp.where(scale > 0, scale, 1.0)
-    rows = [tuple(e / scale for e in row) for row in rows]
+    verts = clip[faces[jnp.maximum(tri, 0)]]  # [N, 3, 4]
+    c = jnp.stack([verts[..., 0], verts[..., 1], verts[..., 3]], axis=-1)  # [N, 3, 3]
+    rows = jnp.stack([jnp.cross(c[:, 1], c[:, 2]), jnp.cross(c[:, 2], c[:, 0]),
+                      jnp.cross(c[:, 0], c[:, 1])], axis=-2)
+    scale = max_small(jnp.abs(rows), (-2, -1))
+    rows = rows / jnp.where(scale > 0, scale, 1.0)
     u = (px.astype(jnp.float32) + offset[0]) * (2.0 / width) - 1.0
     v = 1.0 - (py.astype(jnp.float32) + offset[1]) * (2.0 / height)
-    e = [a * u + b * v + c for a, b, c in rows]
-    s = e[0] + e[1] + e[2]
-    covered = tri >= 0
-    ok = covered & (s != 0.0)
+    e = rows[..., 0] * u[:, None] + rows[..., 1] * v[:, None] + rows[..., 2]
+    s = sum_small(e, keepdims=True)
+    ok = (tri >= 0)[:, None] & (s != 0.0)
     s = jnp.where(ok, s, 1.0)
-    b = [ei / s for ei in e]
-    su = rows[0][0] + rows[1][0] + rows[2][0]
-    sv = rows[0][1] + rows[1][1] + rows[2][1]
-    db_du = [(row[0] - bi * su) / s for row, bi in zip(rows, b)]
-    db_dv = [(row[1] - bi * sv) / s for row, bi in zip(rows, b)]
-    inside = (b[0] >= 0.0) & (b[1] >= 0.0) & (b[2] >= 0.0)
+    b = e / s
+    db_du = (rows[..., 0] - b * sum_small(rows[..., 0], keepdims=True)) / s
+    db_dv = (rows[..., 1] - b * sum_small(rows[..., 1], keepdims=True)) / s
+    inside = all_small(b >= 0.0)[:, None]
     # Inside the triangle clamp a rounding error away, as resolve does; outside extrapolate.
-    bc = [jnp.clip(bi, 0.0, 1.0) for bi in b]
-    norm = jnp.maximum(bc[0] + bc[1] + bc[2], 1e-30)
-    b = [jnp.where(inside, ci / norm, bi) for ci, bi in zip(bc, b)]
-    third = jnp.where(covered, jnp.float32(1.0 / 3.0), 0.0)
-    return (tuple(jnp.where(ok, bi, third) for bi in b),
-            tuple(jnp.where(ok, d * (2.0 / width), 0.0) for d in db_du),
-            tuple(jnp.where(ok, d * (-2.0 / height), 0.0) for d in db_dv))
+    bc = jnp.clip(b, 0.0, 1.0)
+    bc = bc / jnp.maximum(sum_small(bc, keepdims=True), 1e-30)
+    b = jnp.where(inside, bc, b)
+    zero = jnp.zeros_like(b)
+    third = jnp.full_like(b, 1.0 / 3.0)
+    bary = jnp.where(ok, b, jnp.where((tri >= 0)[:, None], third, zero))
+    ddx = jnp.where(ok, db_du * (2.0 / width), zero)
+    ddy = jnp.where(ok, db_dv * (-2.0 / height), zero)
+    return bary, ddx, ddy

@@ -24,29 +24,10 @@ def _interp(w: tuple, rows: list) -> tuple:
 
 
 @jax.named_scope("surface_points")
-def _weights(valid: Array, bary, dbary_dx, dbary_dy):
-    """(valid, and finite barycentrics; the barycentrics, 1/3 each where not valid; their
-    derivatives, 0 where not valid or not finite), each as a tuple of components."""
-    third = jnp.float32(1.0 / 3.0)
-    if isinstance(bary, tuple):  # columns: each selected apart, so that none is stacked
-        valid = valid & jnp.isfinite(bary[0]) & jnp.isfinite(bary[1]) & jnp.isfinite(bary[2])
-        return (valid, tuple(jnp.where(valid, c, third) for c in bary),
-                tuple(jnp.where(valid & jnp.isfinite(c), c, 0.0) for c in dbary_dx),
-                tuple(jnp.where(valid & jnp.isfinite(c), c, 0.0) for c in dbary_dy))
-    valid = valid & all_small(jnp.isfinite(bary))
-    vcol = valid[:, None]
-    return (valid, components(jnp.where(vcol, bary, third)),
-            components(jnp.where(vcol & jnp.isfinite(dbary_dx), dbary_dx, 0.0)),
-            components(jnp.where(vcol & jnp.isfinite(dbary_dy), dbary_dy, 0.0)))
-
-
 def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dbary_dx: Array,
                    dbary_dy: Array) -> SurfacePoints:
     """A flat batch of N points: tri_id int32[N] (-1 = none), bary/dbary_dx/dbary_dy float32[N, 3]
-    (perspective-correct barycentrics and their derivatives per pixel right / down), or each
-    a tuple of its three float32[N] columns (``resolve.barycentrics_from_rows``'s and
-    ``resolve.pair_barycentric_columns``'s: computed in the same program, columns fuse into
-    the kernels that use them, where XLA stored the stacked arrays between the two).
+    (perspective-correct barycentrics and their derivatives per pixel right / down).
 
     Position, normal, uv and tangent are interpolated with ``bary``; uv derivatives follow by
     the chain rule, duv/dx = sum_i dbary_i/dx * uv_i. The geometric normal (of the triangle) and
@@ -56,7 +37,11 @@ def surface_points(scene: Scene, camera: Camera, tri_id: Array, bary: Array, dba
     """
     tri_id = jnp.asarray(tri_id, jnp.int32)
     valid = (tri_id >= 0) & (tri_id < scene.faces.shape[0])
-    valid, w, w_dx, w_dy = _weights(valid, bary, dbary_dx, dbary_dy)
+    valid = valid & all_small(jnp.isfinite(bary))
+    vcol = valid[:, None]
+    w = components(jnp.where(vcol, bary, jnp.float32(1.0 / 3.0)))
+    w_dx = components(jnp.where(vcol & jnp.isfinite(dbary_dx), dbary_dx, 0.0))
+    w_dy = components(jnp.where(vcol & jnp.isfinite(dbary_dy), dbary_dy, 0.0))
     t = jnp.where(valid, tri_id, 0)
     corners = list(components(scene.faces[t]))
     p = _at_corners(scene.positions, corners)

@@ -15,6 +15,7 @@ from jaxrender.pipelines import get_pipeline, make_config, program
 from jaxrender.pipelines.reference import (
     DEFAULT_K,
     ReferenceConfig,
+    _bary_at,
     _offset,
     convergence_psnr,
     render,
@@ -24,6 +25,7 @@ from jaxrender.raster import rasterize
 from jaxrender.raster.fragments import collect_fragments, default_fragment_capacity
 from jaxrender.raster.rasterize import default_clip_capacity, default_work_capacity
 from jaxrender.raster import samples as sample_patterns
+from jaxrender.raster.resolve import barycentrics
 from jaxrender.raster.setup import SUBPIXEL_BITS
 from jaxrender.scene import Material, MeshPart, look_at, make_lights, world_to_clip
 from jaxrender.scene.builtin import checker_image
@@ -82,6 +84,22 @@ def test_offsets_are_the_stratified_pattern():
         want = np.asarray(sample_patterns.to_fixed(sample_patterns.stratified(k), SUBPIXEL_BITS))
         got = np.asarray(_offset(np.arange(k * k), k)).T
         np.testing.assert_array_equal(got, want, err_msg=f"k={k}")
+
+
+def test_alpha_barycentrics_are_the_resolve_ones():
+    """The alpha test's per-fragment barycentrics are those resolve() gives the winner."""
+    cam = look_at((0, 0, 2), (0, 0, 0))
+    pos = jnp.asarray([[-1, -1, 0], [1, -0.5, -1], [0, 1, 0.5]], jnp.float32)
+    faces = jnp.asarray([[0, 1, 2]], jnp.int32)
+    clip = world_to_clip(pos, cam, 8 / 6)
+    tri = jnp.zeros((6, 8), jnp.int32)
+    want = barycentrics(tri, clip, faces, 8, 6, jnp.asarray([0.25, 0.75], jnp.float32))
+    yy, xx = np.mgrid[0:6, 0:8]
+    got = _bary_at(tri.reshape(-1), jnp.asarray(xx.ravel() + 0.25, jnp.float32),
+                   jnp.asarray(yy.ravel() + 0.75, jnp.float32), clip, faces, 8, 6)
+    for name, a, b in zip(("bary", "dbary_dx", "dbary_dy"), got, want):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b).reshape(-1, 3), atol=1e-6,
+                                   err_msg=name)
 
 
 def test_equals_rasterizer_samples_shaded_and_averaged(scene_a):

@@ -75,9 +75,9 @@ def test_barycentrics_at_sub_pixel_points_match_the_projected_triangle(rng):
     ys, xs = np.divmod(np.arange(tri.size), W)
     x = (xs + rng.uniform(0.0, 1.0, tri.size)).astype(np.float32)
     y = (ys + rng.uniform(0.0, 1.0, tri.size)).astype(np.float32)
-    columns = barycentrics_from_rows(triangle_rows(clip, jnp.asarray(f)), jnp.asarray(tri),
-                                     jnp.asarray(x), jnp.asarray(y), W, H)
-    bary, ddx, ddy = (np.stack([np.asarray(c, np.float64) for c in v3], -1) for v3 in columns)
+    got = barycentrics_from_rows(triangle_rows(clip, jnp.asarray(f)), jnp.asarray(tri),
+                                 jnp.asarray(x), jnp.asarray(y), W, H)
+    bary, ddx, ddy = (np.asarray(a, np.float64) for a in got)
 
     c = np.asarray(clip, np.float64)[f[np.maximum(tri, 0)]]  # [N, 3, 4]
     sx = (c[..., 0] / c[..., 3] + 1.0) * W / 2
