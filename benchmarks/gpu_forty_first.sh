@@ -16,18 +16,23 @@
 #   where its 37-39 ms go (H100, twenty-seventh session) against issue 23's 25. The offline
 #   H100 program streams about 4 GB a pass of 8 samples (32 GB, ~10 ms a frame at 3.35 TB/s),
 #   so most of the frame is not its large buffers' traffic. untimed: as gpu_thirty_ninth.sh's.
-# Prepared later in the session (no device came; carry [".whl", ".v/b41"], .v/b41 is
-# `git archive 46405b1 jaxrender`, the tree before the barycentrics as columns):
+# Prepared later in the session (no device came; carry [".whl", ".v/b41",
+# ".v/barycentric_columns"]: .v/b41 is `git archive 46405b1 jaxrender`, the tree before this
+# session's changes, and .v/barycentric_columns this tree with
+# benchmarks/variants/barycentric_columns.patch applied, as benchmarks/variants/prepare.sh
+# builds it):
 #   NO_AUTO_TARGETS=1 bash benchmarks/gpu_forty_first.sh cols refab
-# cols: forward, deferred and object space on glass, b41 against this tree (A B B A): the pairs'
-#   barycentrics as columns (offline H100 programs: forward 681 -> 600 launching
-#   instructions, its shading block of 2^20 lanes writes about 50 MB where it wrote 130, the
-#   transparent layers' branches about half). Predicted: forward on glass 0.15-0.3 ms a frame
-#   faster, deferred 0.05-0.15; object space (its shadels' barycentrics as columns too: 943 ->
-#   913 launching instructions) 0.03-0.1.
-# refab: the 64-sample reference on terrain, foliage and room (2-frame pans), b41 against this
-#   tree: the samples' barycentrics as columns, stored nowhere, and the depth buffer's fill
-#   no longer copied (a pass of 8 samples writes 0.7-1.2 GB less). Predicted 6-13% faster.
+# cols: forward, deferred and object space on glass, this tree against the columns variant
+#   (A B B A): the barycentrics as columns, which XLA stops storing (offline H100 programs:
+#   forward 681 -> 600 launching instructions, its shading block of 2^20 lanes writes 50 MB
+#   where it writes 130, the transparent layers' branches about half) but computes again in
+#   every kernel that uses them (1.3-10x slower on the CPU, RESULTS.md). Predicted on a GPU:
+#   forward on glass within -0.3..+0.2 ms a frame: the traffic it saves against the
+#   recomputation, which the offline program cannot weigh.
+# refab: the 64-sample reference on terrain, foliage and room (2-frame pans), b41, this tree
+#   and the columns variant: this tree computes the samples' barycentrics where it shades and
+#   no longer copies the depth buffer's fill (predicted 2-4% faster); the variant stores no
+#   barycentrics (a pass writes 0.7-1.2 GB less than b41's, offline).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do
   if [ "$part" = laybase ]; then
@@ -39,11 +44,13 @@ for part in $(targets_first "$*"); do
   elif [ "$part" = cols ]; then
     cached_compiles
     S=$S8
-    side_by_side cols 200 "b41 after" --scenes glass --pipelines forward deferred object_space
+    side_by_side cols 200 "after barycentric_columns" --scenes glass --pipelines forward \
+      deferred object_space
   elif [ "$part" = refab ]; then
     cached_compiles
     S="python3 benchmarks/bench_sequence.py --frames 2 --rounds 3 --no-single --outputs images"
-    side_by_side refab 140 "b41 after" --scenes terrain foliage room --pipelines reference
+    ORDERS=1 side_by_side refab 200 "b41 after barycentric_columns" --scenes terrain foliage \
+      room --pipelines reference
   elif [ "$part" = refprof ]; then
     prof reference terrain 150 raster shade resolve coverage reconstruct
     prof reference foliage 150 raster shade resolve coverage alpha reconstruct
