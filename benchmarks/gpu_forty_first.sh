@@ -31,7 +31,7 @@
 #   recomputation, which the offline program cannot weigh.
 # refab: the 64-sample reference on terrain, foliage and room (2-frame pans), b41, this tree
 #   and the columns variant: this tree computes the samples' barycentrics where it shades and
-#   no longer copies the depth buffer's fill (predicted 2-4% faster); the variant stores no
+#   no longer copies the depth buffer's fill (predicted 1-2% faster); the variant stores no
 #   barycentrics (a pass writes 0.7-1.2 GB less than b41's, offline).
 . "$(dirname "$0")/gpu_env.sh"
 for part in $(targets_first "$*"); do

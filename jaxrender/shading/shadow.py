@@ -12,7 +12,7 @@ import jax.numpy as jnp
 from jaxrender.fusion import sum_small
 from jaxrender.raster.rasterize import rasterize_depth_clip
 from jaxrender.scene.scene import Scene, ShadowMap
-from jaxrender.shading.vec import components, cross, safe_normalize
+from jaxrender.shading.vec import cross, safe_normalize
 from jaxrender.types import Array
 
 
@@ -62,15 +62,10 @@ def shadow_factor(sm: ShadowMap, position: Array, normal: Array, bias: float) ->
     (normal offset) and compared with a constant depth ``bias``; points outside the map are lit."""
     size = sm.depth.shape[-1]
     texel = 2.0 * sm.half_extent[0] / size
-    # _light_space's arithmetic on per-point components, as the shader computes: on [N, 3]
-    # arrays XLA stored the offset point and its light-space coordinates at every launch.
-    d = [p + n * (1.5 * texel) - o for p, n, o in
-         zip(components(position), components(normal), components(sm.origin))]
-    q = [(d[0] * sm.basis[i, 0] + d[1] * sm.basis[i, 1] + d[2] * sm.basis[i, 2])
-         / sm.half_extent[i] for i in range(3)]
-    depth = 0.5 - 0.5 * q[2]
-    tx = (q[0] * 0.5 + 0.5) * size - 0.5
-    ty = (0.5 - q[1] * 0.5) * size - 0.5
+    q = _light_space(position + normal * (1.5 * texel), sm.origin, sm.basis, sm.half_extent)
+    depth = 0.5 - 0.5 * q[:, 2]
+    tx = (q[:, 0] * 0.5 + 0.5) * size - 0.5
+    ty = (0.5 - q[:, 1] * 0.5) * size - 0.5
     x0f, y0f = jnp.floor(tx), jnp.floor(ty)
     fx, fy = tx - x0f, ty - y0f
     x0 = jnp.clip(x0f, -1, size).astype(jnp.int32)
