@@ -121,9 +121,10 @@ def barycentrics_from_rows(rows: list, tri: Array, x: Array, y: Array, width: in
     3 x 4 vertex floats through ``faces`` is a materialised slice gather, slow. ``barycentrics``
     is this at every pixel; the reference calls it per shaded sample, so that its passes keep
     ids and depths only and a compacted launch computes the barycentrics of its samples alone.
-    The three results are stacked [..., 3]: as columns XLA fused them into every kernel that
-    uses them, several times faster to store on a GPU (offline) but 1.3-10x slower on the CPU
-    (``benchmarks/variants/barycentric_columns.patch``, RESULTS.md, forty-first session)."""
+    The three results are stacked [..., 3]. Returned as columns, XLA computes them again in
+    every kernel that uses them instead of storing them: fewer bytes in the offline GPU
+    program, but 1.3-10x slower on the CPU (``benchmarks/variants/barycentric_columns.patch``,
+    RESULTS.md, forty-first session)."""
     covered = tri >= 0
     t = jnp.maximum(tri, 0)
     bary, ddx, ddy, _ = _from_rows([tuple(col[t] for col in r) for r in rows], x, y, width,
